@@ -1,0 +1,20 @@
+#include <pbrt/pbrt.h>
+
+#include <cstdio>
+#include <mutex>
+#include <set>
+
+namespace pbrt {
+
+void Warning(const std::string &msg) {
+    // Each distinct warning is printed once, however many threads or pixels hit it.
+    static std::mutex mutex;
+    static std::set<std::string> seen;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!seen.insert(msg).second) return;
+    std::fprintf(stderr, "pbrt: warning: %s\n", msg.c_str());
+}
+
+void Warning(const FileLoc &loc, const std::string &msg) { Warning(loc.ToString() + ": " + msg); }
+
+}  // namespace pbrt
