@@ -1,0 +1,216 @@
+// Image input and output through libraries: stb_image / stb_image_write (Debian libstb-dev;
+// the implementations live in libstb, linked through cmake/stb.cmake) and OpenEXR.
+#include <pbrt/image.h>
+
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+#include <ImathBox.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <unistd.h>
+
+namespace pbrt {
+
+// IEC 61966-2-1 (sRGB): the piecewise curve with the linear segment below 0.0031308.
+Float LinearToSRGBCurve(Float v) {
+    if (v <= 0.0031308f) return 12.92f * v;
+    return 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+}
+
+Float SRGBCurveToLinear(Float v) {
+    if (v <= 0.04045f) return v / 12.92f;
+    return std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+namespace {
+
+std::string LowerExtension(const std::string &path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char &c : ext) c = char(std::tolower((unsigned char)c));
+    return ext;
+}
+
+PbrtError FileError(const std::string &path, const std::string &why) {
+    return PbrtError("\"" + path + "\": " + why);
+}
+
+// Whether channel c of an image with n channels holds colour (rather than alpha).
+bool IsColorChannel(int c, int n) { return !((n == 2 || n == 4) && c == n - 1); }
+
+Image ReadEXR(const std::string &path) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header &header = file.header();
+        const Imath::Box2i dw = header.dataWindow();
+        const Imf::ChannelList &list = header.channels();
+        auto has = [&](const char *name) { return list.findChannel(name) != nullptr; };
+
+        // RGB(A) if the file has colour, else luminance Y(A).
+        std::vector<const char *> names;
+        if (has("R") && has("G") && has("B")) names = {"R", "G", "B"};
+        else if (has("Y")) names = {"Y"};
+        else throw FileError(path, "EXR file has neither R, G, B nor Y channels");
+        if (has("A")) names.push_back("A");
+        for (const char *n : names)
+            if (list.findChannel(n)->xSampling != 1 || list.findChannel(n)->ySampling != 1)
+                throw FileError(path, "subsampled EXR channels are not supported");
+
+        Image image;
+        image.width = dw.max.x - dw.min.x + 1;
+        image.height = dw.max.y - dw.min.y + 1;
+        image.channels = int(names.size());
+        image.pixels.resize(size_t(image.width) * image.height * image.channels);
+        const size_t xStride = sizeof(float) * image.channels;
+        const size_t yStride = xStride * image.width;
+        Imf::FrameBuffer fb;
+        for (int c = 0; c < image.channels; ++c)
+            fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw,
+                                                 xStride, yStride));
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        return image;
+    } catch (const PbrtError &) {
+        throw;
+    } catch (const std::exception &e) {
+        throw FileError(path, std::string("cannot read EXR image: ") + e.what());
+    }
+}
+
+Image ReadWithStb(const std::string &path, bool decodeSRGB) {
+    Image image;
+    int w = 0, h = 0, n = 0;
+    std::unique_ptr<void, void (*)(void *)> data(nullptr, stbi_image_free);
+
+    if (stbi_is_hdr(path.c_str())) {
+        // Radiance HDR: already linear floats.
+        data.reset(stbi_loadf(path.c_str(), &w, &h, &n, 0));
+        if (!data) throw FileError(path, std::string("cannot read image: ") + stbi_failure_reason());
+        const float *f = static_cast<const float *>(data.get());
+        image.pixels.assign(f, f + size_t(w) * h * n);
+    } else {
+        // 8 or 16 bits per channel, scaled to [0, 1].
+        bool sixteen = stbi_is_16_bit(path.c_str());
+        data.reset(sixteen ? static_cast<void *>(stbi_load_16(path.c_str(), &w, &h, &n, 0))
+                           : static_cast<void *>(stbi_load(path.c_str(), &w, &h, &n, 0)));
+        if (!data) throw FileError(path, std::string("cannot read image: ") + stbi_failure_reason());
+        size_t count = size_t(w) * h * n;
+        image.pixels.resize(count);
+        if (sixteen) {
+            const uint16_t *s = static_cast<const uint16_t *>(data.get());
+            for (size_t i = 0; i < count; ++i) image.pixels[i] = s[i] / 65535.f;
+        } else {
+            const uint8_t *s = static_cast<const uint8_t *>(data.get());
+            for (size_t i = 0; i < count; ++i) image.pixels[i] = s[i] / 255.f;
+        }
+        if (decodeSRGB) {
+            // An 8-bit table avoids a pow() per texel; 16-bit values use the curve.
+            std::array<float, 256> table;
+            for (int i = 0; i < 256; ++i) table[i] = SRGBCurveToLinear(i / 255.f);
+            for (size_t i = 0; i < count; ++i) {
+                if (!IsColorChannel(int(i % n), n)) continue;
+                image.pixels[i] = sixteen ? SRGBCurveToLinear(image.pixels[i])
+                                          : table[static_cast<const uint8_t *>(data.get())[i]];
+            }
+        }
+    }
+    image.width = w;
+    image.height = h;
+    image.channels = n;
+    return image;
+}
+
+void CheckImage(const std::string &path, const Image &image) {
+    if (image.width <= 0 || image.height <= 0 || image.channels < 1 || image.channels > 4 ||
+        image.pixels.size() != size_t(image.width) * image.height * image.channels)
+        throw FileError(path, "cannot write an image of " + std::to_string(image.width) + "x" +
+                                  std::to_string(image.height) + "x" +
+                                  std::to_string(image.channels) + " with " +
+                                  std::to_string(image.pixels.size()) + " values");
+}
+
+void WriteEXR(const std::string &path, const std::string &target, const Image &image) {
+    static const char *const names[4][4] = {
+        {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
+    try {
+        Imf::Header header(image.width, image.height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        for (int c = 0; c < image.channels; ++c)
+            header.channels().insert(names[image.channels - 1][c], Imf::Channel(Imf::FLOAT));
+        const size_t xStride = sizeof(float) * image.channels;
+        const size_t yStride = xStride * image.width;
+        Imf::FrameBuffer fb;
+        for (int c = 0; c < image.channels; ++c)
+            fb.insert(names[image.channels - 1][c],
+                      Imf::Slice(Imf::FLOAT,
+                                 (char *)const_cast<float *>(image.pixels.data() + c), xStride,
+                                 yStride));
+        Imf::OutputFile file(path.c_str(), header);
+        file.setFrameBuffer(fb);
+        file.writePixels(image.height);
+    } catch (const std::exception &e) {
+        throw FileError(target, std::string("cannot write EXR image: ") + e.what());
+    }
+}
+
+void WritePNG(const std::string &path, const std::string &target, const Image &image) {
+    std::vector<uint8_t> bytes(image.pixels.size());
+    for (size_t i = 0; i < bytes.size(); ++i) {
+        float v = image.pixels[i];
+        if (!(v > 0)) v = 0;  // also NaN
+        v = std::min(v, 1.f);
+        if (IsColorChannel(int(i % image.channels), image.channels)) v = LinearToSRGBCurve(v);
+        bytes[i] = uint8_t(std::lround(v * 255.f));
+    }
+    if (!stbi_write_png(path.c_str(), image.width, image.height, image.channels, bytes.data(),
+                        image.width * image.channels))
+        throw FileError(target, "cannot write PNG image");
+}
+
+}  // namespace
+
+Image ReadImage(const std::string &path, bool decodeSRGB) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw FileError(path, "no such image file");
+    std::string ext = LowerExtension(path);
+    if (ext == ".exr") return ReadEXR(path);
+    if (ext == ".png" || ext == ".tga" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" ||
+        ext == ".hdr" || ext == ".ppm" || ext == ".pgm")
+        return ReadWithStb(path, decodeSRGB);
+    throw FileError(path, "unsupported image format \"" + ext + "\" (supported: exr, png, tga, "
+                          "jpg, bmp, hdr, ppm, pgm)");
+}
+
+void WriteImage(const std::string &path, const Image &image) {
+    CheckImage(path, image);
+    std::string ext = LowerExtension(path);
+    if (ext != ".exr" && ext != ".png")
+        throw FileError(path, "unsupported output image format \"" + ext + "\" (use .exr or .png)");
+
+    // Write beside the target, then rename: a failed write leaves no partial file.
+    std::string tmp = path + ".tmp" + std::to_string(::getpid());
+    try {
+        if (ext == ".exr") WriteEXR(tmp, path, image);
+        else WritePNG(tmp, path, image);
+    } catch (...) {
+        std::remove(tmp.c_str());
+        throw;
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+        std::remove(tmp.c_str());
+        throw FileError(path, "cannot write image file");
+    }
+}
+
+}  // namespace pbrt

@@ -1,0 +1,45 @@
+// Reading and writing images: textures (PNG, TGA, ... through stb_image; EXR through
+// OpenEXR) and the rendered film (EXR as 32-bit float, or PNG).
+#pragma once
+
+#include <pbrt/pbrt.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace pbrt {
+
+// Pixels stored row by row, top row first, channels interleaved; linear values.
+// Channels: 1 (Y), 2 (Y, A), 3 (R, G, B) or 4 (R, G, B, A).
+struct Image {
+    int width = 0, height = 0, channels = 0;
+    std::vector<float> pixels;
+
+    size_t Index(int x, int y, int c) const {
+        return (size_t(y) * size_t(width) + size_t(x)) * size_t(channels) + size_t(c);
+    }
+    float Get(int x, int y, int c) const { return pixels[Index(x, y, c)]; }
+};
+
+// Reads an image; the format comes from the file name's extension (case-insensitive):
+//   .exr                         OpenEXR: R, G, B (and A) or Y (and A), as linear float
+//   .png .tga .jpg .jpeg .bmp    stb_image, 8 or 16 bits per channel, scaled to [0, 1];
+//   .ppm .pgm                    with decodeSRGB the colour channels (not alpha) are
+//                                decoded from the sRGB curve to linear values
+//   .hdr                         stb_image, Radiance RGBE, linear float
+// Throws PbrtError naming the file if it is missing, unreadable or of another format.
+Image ReadImage(const std::string &path, bool decodeSRGB);
+
+// Writes an image; the format comes from the extension:
+//   .exr  32-bit float channels R, G, B (A) or Y (A), ZIP compression
+//   .png  8 bits per channel: colour sRGB-encoded, alpha linear, both clamped to [0, 1]
+// The file is written under a temporary name and renamed when complete, so a failed write
+// leaves no partial image. Throws PbrtError naming the file on failure.
+void WriteImage(const std::string &path, const Image &image);
+
+// The sRGB transfer curve (IEC 61966-2-1), on values in [0, 1].
+Float LinearToSRGBCurve(Float linear);
+Float SRGBCurveToLinear(Float encoded);
+
+}  // namespace pbrt
