@@ -1,0 +1,644 @@
+// wavelength_table.h -- sample the wavelengths of a spectral path from a tabulated table.
+//
+// A table holds kNumDensities = 4 densities p_0..p_3 over one strictly increasing grid of
+// nodes lambda_0 < ... < lambda_M [nm] (SPEC section 1). Each p_k is piecewise linear between
+// its node values, zero outside [lambda_0, lambda_M], and integrates to 1 by the trapezoid
+// rule, so its CDF F_k is piecewise quadratic. A path draws ONE u and gets four wavelengths
+// lambda_k = F_k^-1(u); the estimator divides f(lambda_j) by the mixture density
+// (1/4) sum_k p_k(lambda_j) (the balance heuristic over the four densities).
+//
+// Header only, standard library only, C++17. Every density routine comes as a triple:
+// Sample (exact inverse CDF), Pdf, Invert (the CDF). The functions in namespace kernel work
+// on raw arrays and are plain arithmetic, so a GPU renderer can call them on device copies
+// of the arrays (Pack / ViewPacked; define WAVELENGTH_TABLE_HOST_DEVICE as
+// `__host__ __device__`).
+//
+// File layouts (SPEC section 2), both read by LoadTable / ParseTable:
+//   - commented CSV: lines starting with '#' are comments, then the header
+//     `lambda_nm,pdf0,pdf1,pdf2,pdf3`, then one row per node;
+//   - headerless "4 x 81": four rows of 81 densities at 380, 385, ..., 780 nm.
+// Blank lines and '#' lines are skipped in both; a row may end with one trailing comma.
+// Bad input throws TableError("FILE:LINE: reason"); "FILE: reason" when no line applies
+// (a missing file, or a table built in memory with MakeTable).
+//
+// The same rules, with the same conventions at the edges (which segment u = F_k(node)
+// selects, u = 0 and u = 1 map to the ends of the support), are implemented in Python by
+// optimizer/wavelength_pdf/sampling.py; patches/tests/data/vectors*.csv pin the two together.
+
+#ifndef WAVELENGTH_TABLE_H
+#define WAVELENGTH_TABLE_H
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <istream>
+#include <limits>
+#include <locale>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#ifndef WAVELENGTH_TABLE_HOST_DEVICE
+#define WAVELENGTH_TABLE_HOST_DEVICE
+#endif
+
+namespace wavelength_table {
+
+// Number of densities in a table = wavelengths per path (SPEC section 1).
+constexpr int kNumDensities = 4;
+// Column header of the commented CSV layout (SPEC section 2).
+constexpr const char *kHeader = "lambda_nm,pdf0,pdf1,pdf2,pdf3";
+// Grid of the headerless layout: 81 nodes, 380..780 nm in 5 nm steps (SPEC section 2).
+constexpr int kWideNodes = 81;
+constexpr double kWideFirst = 380.0, kWideStep = 5.0;
+
+// A validated table: pdf[k] integrates to 1 by the trapezoid rule over grid, cdf[k][i] is
+// F_k(grid[i]) with cdf[k].front() == 0 and cdf[k].back() == 1 exactly.
+struct Table {
+    std::vector<double> grid;                            // nm, strictly increasing, >= 2 nodes
+    std::array<std::vector<double>, kNumDensities> pdf;  // 1/nm at the nodes, >= 0
+    std::array<std::vector<double>, kNumDensities> cdf;  // at the nodes
+    std::string source;                                  // file name (or the name given)
+};
+
+// Invalid table: the message reads "FILE:LINE: reason" (or "FILE: reason" when line is 0).
+class TableError : public std::runtime_error {
+  public:
+    TableError(const std::string &file, int line, const std::string &reason)
+        : std::runtime_error(Format(file, line, reason)), file_(file), line_(line),
+          reason_(reason) {}
+    const std::string &file() const { return file_; }
+    int line() const { return line_; }
+    const std::string &reason() const { return reason_; }
+
+  private:
+    static std::string Format(const std::string &file, int line, const std::string &reason) {
+        if (line > 0)
+            return file + ":" + std::to_string(line) + ": " + reason;
+        return file + ": " + reason;
+    }
+    std::string file_;
+    int line_;
+    std::string reason_;
+};
+
+// Pointers to the arrays of a table (of a Table, or of a packed copy in GPU memory);
+// trivially copyable, so it can be passed to a kernel.
+struct TableView {
+    const double *grid;
+    const double *pdf[kNumDensities];
+    const double *cdf[kNumDensities];
+    int n;  // nodes
+};
+
+// ---------------------------------------------------------------------------------------
+// Kernels on raw arrays: one density with n >= 2 nodes (grid, normalized pdf, cdf).
+// ---------------------------------------------------------------------------------------
+namespace kernel {
+
+// Largest i in [0, n-1] with x[i] <= v (0 if v < x[0]); x is non-decreasing. A hand-written
+// binary search instead of std::upper_bound so that it also compiles as device code.
+WAVELENGTH_TABLE_HOST_DEVICE inline int LastNotAbove(const double *x, int n, double v) {
+    int lo = 0, hi = n;  // invariant: x[j] <= v for j < lo, x[j] > v for j >= hi
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (x[mid] <= v)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo > 0 ? lo - 1 : 0;
+}
+
+// lambda = F^-1(u), exact for the piecewise-linear density; *segment receives the i with
+// grid[i] <= lambda <= grid[i + 1] (so the caller can evaluate densities there directly).
+WAVELENGTH_TABLE_HOST_DEVICE inline double SampleSegment(const double *grid, const double *pdf,
+                                                         const double *cdf, int n, double u,
+                                                         int *segment) {
+    // Clamp u to [0, 1] (NaN counts as 0).
+    if (!(u > 0.0))
+        u = 0.0;
+    else if (u > 1.0)
+        u = 1.0;
+    // The segment holding u: the last node with F <= u skips zero-probability segments to
+    // the left of u; at the top (u = 1) step back over zero-probability segments so that u
+    // never lands in a zero tail.
+    int i = LastNotAbove(cdf, n, u);
+    if (i > n - 2)
+        i = n - 2;
+    while (i > 0 && !(cdf[i + 1] > cdf[i]))
+        --i;
+    *segment = i;
+    // Inside the segment the CDF is quadratic. Measured from the end where the density is
+    // smaller, the offset t solves a t^2 / 2 + q t - r = 0 with q >= 0 the density at that
+    // end, a >= 0 the slope away from it and r >= 0 the probability between that end and u.
+    // The root is taken as t = 2 r / (q + sqrt(q^2 + 2 a r)): every term is >= 0, so nothing
+    // cancels; it tends to r / q as a -> 0 and to sqrt(2 r / a) as q -> 0. (Solving from the
+    // larger end instead would subtract nearly equal numbers where the density approaches 0.)
+    const double h = grid[i + 1] - grid[i];
+    const double p0 = pdf[i], p1 = pdf[i + 1];
+    const bool fromLeft = p1 >= p0;
+    const double q = fromLeft ? p0 : p1;
+    const double a = (fromLeft ? p1 - p0 : p0 - p1) / h;
+    const double r = fromLeft ? u - cdf[i] : cdf[i + 1] - u;
+    if (!(r > 0.0))
+        return fromLeft ? grid[i] : grid[i + 1];
+    const double den = q + std::sqrt(q * q + 2.0 * a * r);
+    double t = den > 0.0 ? 2.0 * r / den : 0.0;
+    t = t > h ? h : t;
+    return fromLeft ? grid[i] + t : grid[i + 1] - t;
+}
+
+// lambda = F^-1(u), exact for the piecewise-linear density.
+WAVELENGTH_TABLE_HOST_DEVICE inline double Sample(const double *grid, const double *pdf,
+                                                  const double *cdf, int n, double u) {
+    int segment;
+    return SampleSegment(grid, pdf, cdf, n, u, &segment);
+}
+
+// p(lambda): linear between nodes, 0 outside [grid[0], grid[n-1]].
+WAVELENGTH_TABLE_HOST_DEVICE inline double Pdf(const double *grid, const double *pdf, int n,
+                                               double lambda) {
+    if (!(lambda >= grid[0] && lambda <= grid[n - 1]))
+        return 0.0;
+    int i = LastNotAbove(grid, n, lambda);
+    if (i > n - 2)
+        i = n - 2;
+    const double a = (lambda - grid[i]) / (grid[i + 1] - grid[i]);
+    return pdf[i] + a * (pdf[i + 1] - pdf[i]);
+}
+
+// F(lambda): the u that Sample maps to lambda (where p > 0); 0 left of the grid, 1 right.
+WAVELENGTH_TABLE_HOST_DEVICE inline double Invert(const double *grid, const double *pdf,
+                                                  const double *cdf, int n, double lambda) {
+    if (!(lambda > grid[0]))
+        return 0.0;  // also NaN
+    if (lambda >= grid[n - 1])
+        return 1.0;
+    int i = LastNotAbove(grid, n, lambda);
+    if (i > n - 2)
+        i = n - 2;
+    // Exact area of the trapezoid under the linear density from grid[i] to lambda.
+    const double t = lambda - grid[i];
+    const double pl = pdf[i] + (pdf[i + 1] - pdf[i]) * (t / (grid[i + 1] - grid[i]));
+    const double F = cdf[i] + 0.5 * t * (pdf[i] + pl);
+    return F < 0.0 ? 0.0 : (F > 1.0 ? 1.0 : F);
+}
+
+// (1/4) sum_k p_k(lambda).
+WAVELENGTH_TABLE_HOST_DEVICE inline double MixturePdf(const TableView &v, double lambda) {
+    double sum = 0.0;
+    for (int k = 0; k < kNumDensities; ++k)
+        sum += Pdf(v.grid, v.pdf[k], v.n, lambda);
+    return sum / kNumDensities;
+}
+
+// The four wavelengths of a path from one u and their mixture densities. All densities share
+// the grid, so the segment found while sampling lambda_j serves to evaluate the four
+// densities at lambda_j: four binary searches per path in all.
+WAVELENGTH_TABLE_HOST_DEVICE inline void SampleFour(const TableView &v, double u,
+                                                    double lambda[kNumDensities],
+                                                    double pdf[kNumDensities]) {
+    int segment[kNumDensities];
+    for (int k = 0; k < kNumDensities; ++k)
+        lambda[k] = SampleSegment(v.grid, v.pdf[k], v.cdf[k], v.n, u, &segment[k]);
+    for (int j = 0; j < kNumDensities; ++j) {
+        const int i = segment[j];
+        const double a = (lambda[j] - v.grid[i]) / (v.grid[i + 1] - v.grid[i]);
+        double sum = 0.0;
+        for (int k = 0; k < kNumDensities; ++k)
+            sum += v.pdf[k][i] + a * (v.pdf[k][i + 1] - v.pdf[k][i]);
+        pdf[j] = sum / kNumDensities;
+    }
+}
+
+}  // namespace kernel
+
+// A view of the arrays of `t` (valid while `t` lives).
+inline TableView View(const Table &t) {
+    TableView v;
+    v.grid = t.grid.data();
+    for (int k = 0; k < kNumDensities; ++k) {
+        v.pdf[k] = t.pdf[k].data();
+        v.cdf[k] = t.cdf[k].data();
+    }
+    v.n = static_cast<int>(t.grid.size());
+    return v;
+}
+
+// ---------------------------------------------------------------------------------------
+// Sampling a table (k = 0..3 picks the density).
+// ---------------------------------------------------------------------------------------
+
+// lambda = F_k^-1(u) [nm]; u = 0 maps to the left end of p_k's support, u = 1 to its right.
+inline double Sample(const Table &t, int k, double u) {
+    return kernel::Sample(t.grid.data(), t.pdf[k].data(), t.cdf[k].data(),
+                          static_cast<int>(t.grid.size()), u);
+}
+
+// p_k(lambda) [1/nm].
+inline double Pdf(const Table &t, int k, double lambda) {
+    return kernel::Pdf(t.grid.data(), t.pdf[k].data(), static_cast<int>(t.grid.size()), lambda);
+}
+
+// F_k(lambda) in [0, 1].
+inline double Invert(const Table &t, int k, double lambda) {
+    return kernel::Invert(t.grid.data(), t.pdf[k].data(), t.cdf[k].data(),
+                          static_cast<int>(t.grid.size()), lambda);
+}
+
+// (1/4) sum_k p_k(lambda) [1/nm]: the density a renderer divides by when it averages the
+// four wavelengths of a path (SPEC section 1).
+inline double MixturePdf(const Table &t, double lambda) {
+    double sum = 0.0;
+    for (int k = 0; k < kNumDensities; ++k)
+        sum += Pdf(t, k, lambda);
+    return sum / kNumDensities;
+}
+
+// The four wavelengths of one path from ONE u: lambda[k] = F_k^-1(u), pdf[j] =
+// MixturePdf(lambda[j]). pdf[j] > 0 except on a set of u of measure zero (u = 0 or 1 at
+// an end of the support where the densities vanish); a renderer counts such a sample as 0.
+inline void SampleFour(const Table &t, double u, double lambda[kNumDensities],
+                       double pdf[kNumDensities]) {
+    kernel::SampleFour(View(t), u, lambda, pdf);
+}
+
+// ---------------------------------------------------------------------------------------
+// Building and validating tables.
+// ---------------------------------------------------------------------------------------
+namespace detail {
+
+// v with `digits` significant digits (%g style), in the classic locale.
+inline std::string FormatDigits(double v, int digits) {
+    std::ostringstream os;
+    os.imbue(std::locale::classic());
+    os.precision(digits);
+    os << v;
+    return os.str();
+}
+
+// The shortest text that reads back as v (like Python's repr), for values in messages.
+inline std::string FormatNumber(double v) {
+    for (int digits = 6; digits < 17; ++digits) {
+        const std::string s = FormatDigits(v, digits);
+        std::istringstream is(s);
+        is.imbue(std::locale::classic());
+        double back = 0.0;
+        if (is >> back && back == v)
+            return s;
+    }
+    return FormatDigits(v, 17);
+}
+
+// Lines of the file that hold each node and each value (0 when the table is not from a file).
+struct SourceLines {
+    std::vector<int> node;                                // line of grid[i]
+    std::array<std::vector<int>, kNumDensities> value;   // line of values[k][i]
+};
+
+// Validate, renormalize (trapezoid rule) and build the CDFs.
+inline Table Build(std::vector<double> grid, std::array<std::vector<double>, kNumDensities> values,
+                   const std::string &name, const SourceLines &lines) {
+    auto nodeLine = [&](std::size_t i) { return i < lines.node.size() ? lines.node[i] : 0; };
+    auto valueLine = [&](int k, std::size_t i) {
+        return i < lines.value[k].size() ? lines.value[k][i] : 0;
+    };
+    const std::size_t n = grid.size();
+    if (n < 2)
+        throw TableError(name, nodeLine(0),
+                         "a table needs at least 2 grid nodes, got " + std::to_string(n));
+    for (int k = 0; k < kNumDensities; ++k)
+        if (values[k].size() != n)
+            throw TableError(name, 0, "pdf" + std::to_string(k) + " has " +
+                                          std::to_string(values[k].size()) +
+                                          " values, the grid has " + std::to_string(n));
+    // Numbers: the wavelengths, then each density in turn (the order of the Python reader,
+    // wavelength_pdf.table, so that both name the same problem first).
+    for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite(grid[i]))
+            throw TableError(name, nodeLine(i),
+                             "wavelength is " + FormatNumber(grid[i]) + " (must be finite)");
+    for (int k = 0; k < kNumDensities; ++k) {
+        for (std::size_t i = 0; i < n; ++i) {
+            const double v = values[k][i];
+            const std::string what = "pdf" + std::to_string(k) + " is ";
+            const std::string where = " at " + FormatDigits(grid[i], 6) + " nm";
+            if (std::isnan(v))
+                throw TableError(name, valueLine(k, i), what + "NaN" + where);
+            if (std::isinf(v))
+                throw TableError(name, valueLine(k, i), what + "infinite" + where);
+            if (v < 0)
+                throw TableError(name, valueLine(k, i),
+                                 what + "negative (" + FormatNumber(v) + ")" + where);
+        }
+    }
+    for (std::size_t i = 1; i < n; ++i)
+        if (!(grid[i] > grid[i - 1]))
+            throw TableError(name, nodeLine(i),
+                             "grid is not strictly increasing (" + FormatNumber(grid[i - 1]) +
+                                 " then " + FormatNumber(grid[i]) + " nm)");
+    // Integrate each density (trapezoid rule, exact for piecewise-linear densities),
+    // then divide the node values and the cumulative sums by the total.
+    Table t;
+    t.grid = std::move(grid);
+    t.source = name;
+    for (int k = 0; k < kNumDensities; ++k) {
+        // One operation per statement: no fused multiply-add, so the CDF has the same bits
+        // as the Python sampler's (the test vectors rely on it where the CDF is flat).
+        std::vector<double> cum(n, 0.0);
+        for (std::size_t i = 0; i + 1 < n; ++i) {
+            const double width = t.grid[i + 1] - t.grid[i];
+            const double mean = 0.5 * (values[k][i] + values[k][i + 1]);
+            const double area = mean * width;
+            cum[i + 1] = cum[i] + area;
+        }
+        const double total = cum[n - 1];
+        const std::string pk = "pdf" + std::to_string(k);
+        if (!(total > 0))
+            throw TableError(name, valueLine(k, 0), pk + " is zero everywhere");
+        if (!std::isfinite(total))
+            throw TableError(name, valueLine(k, 0),
+                             pk + " integrates to infinity (values too large)");
+        t.pdf[k].resize(n);
+        t.cdf[k].resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            t.pdf[k][i] = values[k][i] / total;
+            t.cdf[k][i] = cum[i] / total;  // x / x == 1 exactly, so cdf.back() == 1
+            if (!std::isfinite(t.pdf[k][i]))
+                throw TableError(name, valueLine(k, i),
+                                 pk + " cannot be normalized (values too small)");
+        }
+    }
+    return t;
+}
+
+inline std::string Trim(const std::string &s) {
+    const char *ws = " \t\r\n\f\v";
+    const std::size_t a = s.find_first_not_of(ws);
+    if (a == std::string::npos)
+        return std::string();
+    return s.substr(a, s.find_last_not_of(ws) - a + 1);
+}
+
+// Comma-separated fields, trimmed; one trailing empty field (a trailing comma) is dropped.
+inline std::vector<std::string> SplitFields(const std::string &line) {
+    std::vector<std::string> fields;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t comma = line.find(',', start);
+        fields.push_back(Trim(line.substr(start, comma == std::string::npos
+                                                     ? std::string::npos
+                                                     : comma - start)));
+        if (comma == std::string::npos)
+            break;
+        start = comma + 1;
+    }
+    if (fields.size() > 1 && fields.back().empty())
+        fields.pop_back();
+    return fields;
+}
+
+// One line without its terminator; "\n", "\r\n" and a lone "\r" all end a line (the same
+// lines Python's str.splitlines() sees in a table file).
+inline bool GetLine(std::istream &in, std::string &line) {
+    line.clear();
+    std::istream::int_type c = in.get();
+    if (c == std::istream::traits_type::eof())
+        return false;
+    for (; c != std::istream::traits_type::eof(); c = in.get()) {
+        if (c == '\n')
+            break;
+        if (c == '\r') {
+            if (in.peek() == '\n')
+                in.get();
+            break;
+        }
+        line.push_back(static_cast<char>(c));
+    }
+    return true;
+}
+
+inline std::string Lower(std::string s) {
+    for (char &c : s)
+        if (c >= 'A' && c <= 'Z')
+            c = static_cast<char>(c - 'A' + 'a');
+    return s;
+}
+
+// One number; NaN and infinities are returned as such (Build names them). Parsed with the
+// classic locale, so a renderer that switched the C locale still reads "0.5".
+inline double ParseNumber(const std::string &token, const std::string &name, int line) {
+    std::string low = Lower(token);
+    const bool negative = !low.empty() && low[0] == '-';
+    if (!low.empty() && (low[0] == '+' || low[0] == '-'))
+        low.erase(0, 1);
+    if (low == "nan" || low.compare(0, 4, "nan(") == 0)
+        return std::nan("");
+    if (low == "inf" || low == "infinity")
+        return negative ? -std::numeric_limits<double>::infinity()
+                        : std::numeric_limits<double>::infinity();
+    std::istringstream is(token);
+    is.imbue(std::locale::classic());
+    double v = 0.0;
+    is >> v;
+    // A number too large for a double: the stream stores +-max and sets failbit (C++11);
+    // return an infinity, which Build rejects by name (as Python's float() would).
+    const double big = std::numeric_limits<double>::max();
+    if (!token.empty() && is.fail() && (v == big || v == -big) && (is >> std::ws, is.eof()))
+        return v > 0 ? std::numeric_limits<double>::infinity()
+                     : -std::numeric_limits<double>::infinity();
+    if (token.empty() || is.fail() || (is >> std::ws, !is.eof()))
+        throw TableError(name, line, "cannot parse number '" + token + "'");
+    return v;
+}
+
+}  // namespace detail
+
+// A table from node values: validates (no NaN, infinity or negative value, no density zero
+// everywhere, a strictly increasing grid of >= 2 nodes), renormalizes each density by the
+// trapezoid rule and builds the CDFs. Throws TableError("NAME: reason").
+inline Table MakeTable(std::vector<double> grid,
+                       std::array<std::vector<double>, kNumDensities> values,
+                       const std::string &name) {
+    return detail::Build(std::move(grid), std::move(values), name, detail::SourceLines());
+}
+
+// A table from text in either layout of SPEC section 2; `name` is used in error messages.
+inline Table ParseTable(std::istream &in, const std::string &name) {
+    // Collect the non-comment lines as fields, noting the header.
+    struct Row {
+        int line;
+        std::vector<std::string> fields;
+    };
+    std::vector<Row> rows;
+    int header = 0, lineNo = 0;
+    std::string raw;
+    while (detail::GetLine(in, raw)) {
+        ++lineNo;
+        if (lineNo == 1 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0)
+            raw.erase(0, 3);  // a UTF-8 byte-order mark
+        const std::string line = detail::Trim(raw);
+        if (line.empty() || line[0] == '#')
+            continue;
+        std::vector<std::string> fields = detail::SplitFields(line);
+        if (rows.empty() && header == 0 && detail::Lower(fields[0]).compare(0, 6, "lambda") == 0) {
+            header = lineNo;
+            if (fields.size() != 1 + kNumDensities)
+                throw TableError(name, lineNo,
+                                 "header has " + std::to_string(fields.size()) +
+                                     " columns, expected 5 (" + kHeader + ")");
+            continue;
+        }
+        rows.push_back(Row{lineNo, std::move(fields)});
+    }
+    if (in.bad())
+        throw TableError(name, lineNo, "read error");
+    if (rows.empty())
+        throw TableError(name, header > 0 ? header : std::max(1, lineNo),
+                         "no data rows (a table needs at least 2 grid nodes)");
+
+    std::vector<double> grid;
+    std::array<std::vector<double>, kNumDensities> values;
+    detail::SourceLines lines;
+
+    // The headerless 4 x 81 layout: every row wider than the 5 columns of the CSV layout.
+    bool wide = header == 0;
+    for (const Row &r : rows)
+        wide = wide && r.fields.size() > 1 + kNumDensities;
+    if (wide) {
+        if (rows.size() != kNumDensities)
+            throw TableError(name, rows[std::min<std::size_t>(rows.size(), kNumDensities) - 1].line,
+                             std::to_string(rows.size()) + " rows of densities, expected 4 "
+                             "(headerless 4 x 81 layout)");
+        // Shapes first, then numbers (the Python reader's order).
+        for (const Row &r : rows)
+            if (r.fields.size() != kWideNodes)
+                throw TableError(name, r.line,
+                                 std::to_string(r.fields.size()) +
+                                     " densities, expected 81 (headerless 4 x 81 layout, "
+                                     "380..780 nm)");
+        for (int k = 0; k < kNumDensities; ++k) {
+            const Row &r = rows[k];
+            for (const std::string &f : r.fields)
+                values[k].push_back(detail::ParseNumber(f, name, r.line));
+            lines.value[k].assign(kWideNodes, r.line);
+        }
+        for (int i = 0; i < kWideNodes; ++i)
+            grid.push_back(kWideFirst + kWideStep * i);
+        lines.node.assign(kWideNodes, rows[0].line);
+        return detail::Build(std::move(grid), std::move(values), name, lines);
+    }
+
+    // The commented CSV layout: lambda_nm, pdf0..pdf3 on every row.
+    for (const Row &r : rows)
+        if (r.fields.size() != 1 + kNumDensities)
+            throw TableError(name, r.line,
+                             std::to_string(r.fields.size()) + " columns, expected 5 (" +
+                                 kHeader + ")");
+    for (const Row &r : rows) {
+        grid.push_back(detail::ParseNumber(r.fields[0], name, r.line));
+        lines.node.push_back(r.line);
+        for (int k = 0; k < kNumDensities; ++k) {
+            values[k].push_back(detail::ParseNumber(r.fields[1 + k], name, r.line));
+            lines.value[k].push_back(r.line);
+        }
+    }
+    return detail::Build(std::move(grid), std::move(values), name, lines);
+}
+
+// A table from a file in either layout; errors name the file, the line and the reason.
+inline Table LoadTable(const std::string &path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        throw TableError(path, 0, "is a directory, not a table file");
+    std::ifstream in(path);
+    if (!in)
+        throw TableError(path, 0,
+                         std::filesystem::exists(path, ec)
+                             ? "cannot open the table file (permission denied?)"
+                             : "no such file");
+    return ParseTable(in, path);
+}
+
+// ---------------------------------------------------------------------------------------
+// A table in one flat array, for memory a GPU can read (the std::vectors of Table cannot
+// cross to the device). Layout: grid, pdf[0..3], cdf[0..3], n values each.
+// ---------------------------------------------------------------------------------------
+
+// The 9 n doubles of `t` in the packed layout; copy them to device-readable memory.
+inline std::vector<double> Pack(const Table &t) {
+    std::vector<double> out(t.grid);
+    for (int k = 0; k < kNumDensities; ++k)
+        out.insert(out.end(), t.pdf[k].begin(), t.pdf[k].end());
+    for (int k = 0; k < kNumDensities; ++k)
+        out.insert(out.end(), t.cdf[k].begin(), t.cdf[k].end());
+    return out;
+}
+
+// A view of a packed table of n nodes starting at `packed` (wherever it was copied to).
+WAVELENGTH_TABLE_HOST_DEVICE inline TableView ViewPacked(const double *packed, int n) {
+    TableView v;
+    v.grid = packed;
+    for (int k = 0; k < kNumDensities; ++k) {
+        v.pdf[k] = packed + (1 + k) * n;
+        v.cdf[k] = packed + (1 + kNumDensities + k) * n;
+    }
+    v.n = n;
+    return v;
+}
+
+
+// ---------------------------------------------------------------------------------------
+// Support: the fix for zero densities.
+// ---------------------------------------------------------------------------------------
+
+// (1 - share) p_k + share * uniform over [grid.front(), grid.back()] for every k: a mixture
+// with a positive density everywhere on the grid (the defensive mixture of SPEC section 1).
+// share in [0, 1].
+inline Table WithDefensiveMixture(const Table &t, double share) {
+    if (!(share >= 0.0 && share <= 1.0))
+        throw TableError(t.source, 0,
+                         "defensive share must be in [0, 1], got " + detail::FormatNumber(share));
+    const double uniform = 1.0 / (t.grid.back() - t.grid.front());
+    std::array<std::vector<double>, kNumDensities> values;
+    for (int k = 0; k < kNumDensities; ++k) {
+        values[k].resize(t.grid.size());
+        for (std::size_t i = 0; i < t.grid.size(); ++i)
+            values[k][i] = (1.0 - share) * t.pdf[k][i] + share * uniform;
+    }
+    return MakeTable(t.grid, std::move(values), t.source);
+}
+
+// The intervals [a, b] (nm, a < b, merged, increasing) inside the grid's range where the
+// mixture density is zero: wherever all four densities vanish at two neighbouring nodes.
+// Isolated zeros (a single node) have measure zero and are not listed. Outside
+// [grid.front(), grid.back()] the mixture is zero too; a renderer checks that range itself.
+inline std::vector<std::pair<double, double>> ZeroMixtureIntervals(const Table &t) {
+    const std::size_t n = t.grid.size();
+    auto zeroAt = [&](std::size_t i) {
+        for (int k = 0; k < kNumDensities; ++k)
+            if (t.pdf[k][i] > 0.0)
+                return false;
+        return true;
+    };
+    std::vector<std::pair<double, double>> out;
+    for (std::size_t i = 0; i + 1 < n; ++i) {
+        if (!(zeroAt(i) && zeroAt(i + 1)))
+            continue;
+        if (!out.empty() && out.back().second == t.grid[i])
+            out.back().second = t.grid[i + 1];
+        else
+            out.emplace_back(t.grid[i], t.grid[i + 1]);
+    }
+    return out;
+}
+
+}  // namespace wavelength_table
+
+#endif  // WAVELENGTH_TABLE_H

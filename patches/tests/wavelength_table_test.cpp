@@ -1,0 +1,806 @@
+// Tests of patches/include/wavelength_table.h: the sample / pdf / invert triples, SampleFour
+// and its balance-heuristic estimator, zero densities and the defensive mixture, both file
+// layouts and every reject class, the tables of earlier work, and the test vectors written
+// by the Python sampler (scripts/make_test_vectors.py).
+
+#include "wavelength_table.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace wt = wavelength_table;
+
+namespace {
+
+using Values = std::array<std::vector<double>, wt::kNumDensities>;
+
+// An awkward table: irregular grid, exact zeros (a left tail, an interior gap, a right tail),
+// a 0.2 nm spike, a nearly flat segment, a segment rising from zero and one falling to zero.
+wt::Table AwkwardTable() {
+    std::vector<double> grid = {380, 381.5, 400, 450, 500, 520, 545.9,
+                                546.0, 546.1, 560, 600, 650, 700, 780};
+    Values v;
+    v[0] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};                      // flat
+    v[1] = {0, 0, 0, 0, 2, 3, 0.5, 400, 0.5, 1, 1, 1, 0, 0};                // tails + spike
+    v[2] = {5, 4, 3, 2, 0, 0, 0, 0, 0, 1, 2, 3, 4, 5};                      // interior gap
+    v[3] = {1, 1 + 1e-12, 1, 0.2, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0, 0, 0};  // near-flat
+    return wt::MakeTable(grid, v, "awkward");
+}
+
+// A table whose mixture is zero on [500, 520] (all four densities vanish there).
+wt::Table TableWithMixtureGap() {
+    std::vector<double> grid = {380, 450, 500, 510, 520, 600, 780};
+    Values v;
+    v[0] = {1, 1, 0, 0, 0, 1, 1};
+    v[1] = {0, 2, 0, 0, 0, 0, 0};
+    v[2] = {0, 0, 0, 0, 0, 1, 3};
+    v[3] = {3, 1, 0, 0, 0, 1, 0};
+    return wt::MakeTable(grid, v, "gap");
+}
+
+std::string Num(double v) {
+    std::ostringstream os;
+    os.precision(17);
+    os << v;
+    return os.str();
+}
+
+std::string TempPath(const std::string &name) {
+    return (std::filesystem::path(testing::TempDir()) / ("wt_" + name)).string();
+}
+
+std::string WriteFile(const std::string &name, const std::string &text) {
+    const std::string path = TempPath(name);
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+    return path;
+}
+
+// The commented CSV layout of `values` on `grid`.
+std::string CsvText(const std::vector<double> &grid, const Values &v) {
+    std::string s = "# test table\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n";
+    for (size_t i = 0; i < grid.size(); ++i) {
+        s += Num(grid[i]);
+        for (int k = 0; k < 4; ++k)
+            s += "," + Num(v[k][i]);
+        s += "\n";
+    }
+    return s;
+}
+
+// The headerless 4 x 81 layout (with the trailing commas of the files of earlier work).
+std::string WideText(const Values &v) {
+    std::string s;
+    for (int k = 0; k < 4; ++k) {
+        for (double x : v[k])
+            s += Num(x) + ",";
+        s += "\n";
+    }
+    return s;
+}
+
+std::vector<double> WideGrid() {
+    std::vector<double> g;
+    for (int i = 0; i < 81; ++i)
+        g.push_back(380.0 + 5.0 * i);
+    return g;
+}
+
+// Smooth positive densities on the 4 x 81 grid (not normalized).
+Values WideValues() {
+    Values v;
+    for (int k = 0; k < 4; ++k)
+        for (int i = 0; i < 81; ++i)
+            v[k].push_back(1.0 + k + std::sin(0.1 * i * (k + 1)));
+    return v;
+}
+
+// Integral of p_k over [a, b] by Simpson's rule on each grid segment (exact for linear p;
+// the density jumps to 0 at the ends of the grid, so the range is clipped to it first).
+double IntegratePdf(const wt::Table &t, int k, double a, double b) {
+    a = std::max(a, t.grid.front());
+    b = std::min(b, t.grid.back());
+    if (!(a < b))
+        return 0.0;
+    std::vector<double> cuts = {a};
+    for (double g : t.grid)
+        if (g > a && g < b)
+            cuts.push_back(g);
+    cuts.push_back(b);
+    double sum = 0;
+    for (size_t i = 0; i + 1 < cuts.size(); ++i) {
+        const double x0 = cuts[i], x1 = cuts[i + 1];
+        sum += (x1 - x0) / 6 *
+               (wt::Pdf(t, k, x0) + 4 * wt::Pdf(t, k, 0.5 * (x0 + x1)) + wt::Pdf(t, k, x1));
+    }
+    return sum;
+}
+
+// Upper 1e-4 quantile of the chi-square distribution (Wilson-Hilferty approximation,
+// z = 3.719 is the standard-normal 1e-4 upper quantile).
+double ChiSquareLimit(int dof) {
+    const double c = 2.0 / (9.0 * dof);
+    return dof * std::pow(1 - c + 3.719 * std::sqrt(c), 3);
+}
+
+// Expects LoadTable(file with `text`) to throw a TableError naming the file, `line` and
+// `reason` (line 0: the message must not carry a line).
+void ExpectRejected(const std::string &name, const std::string &text, int line,
+                    const std::string &reason) {
+    const std::string path = WriteFile(name, text);
+    try {
+        wt::LoadTable(path);
+        ADD_FAILURE() << name << ": accepted, expected '" << reason << "' at line " << line;
+    } catch (const wt::TableError &e) {
+        const std::string msg = e.what();
+        const std::string prefix = line > 0 ? path + ":" + std::to_string(line) + ": " : path + ": ";
+        EXPECT_EQ(msg.rfind(prefix, 0), 0u) << name << ": '" << msg << "' should start with '"
+                                            << prefix << "'";
+        EXPECT_NE(msg.find(reason), std::string::npos)
+            << name << ": '" << msg << "' should contain '" << reason << "'";
+        EXPECT_EQ(e.line(), line) << msg;
+        EXPECT_EQ(e.file(), path) << msg;
+    }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// The sample / pdf / invert triple.
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, PdfIntegratesToOneAndCdfIsItsIntegral) {
+    const wt::Table t = AwkwardTable();
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> lam(370, 790);
+    for (int k = 0; k < 4; ++k) {
+        const double total = IntegratePdf(t, k, 360, 800);
+        EXPECT_NEAR(total, 1.0, 1e-12) << "pdf" << k;
+        EXPECT_EQ(t.cdf[k].front(), 0.0);
+        EXPECT_EQ(t.cdf[k].back(), 1.0);
+        // Invert is the integral of Pdf, everywhere (also outside the grid).
+        for (int n = 0; n < 200; ++n) {
+            const double l = lam(rng);
+            EXPECT_NEAR(wt::Invert(t, k, l), IntegratePdf(t, k, 360, l), 1e-12)
+                << "pdf" << k << " at " << l;
+        }
+    }
+}
+
+TEST(WavelengthTable, RoundTripSampleInvert) {
+    const wt::Table t = AwkwardTable();
+    std::mt19937_64 rng(2);
+    std::uniform_real_distribution<double> uni(0, 1);
+    for (int k = 0; k < 4; ++k) {
+        for (int n = 0; n < 20000; ++n) {
+            const double u = uni(rng);
+            const double l = wt::Sample(t, k, u);
+            EXPECT_NEAR(wt::Invert(t, k, l), u, 1e-13) << "pdf" << k << " u=" << u;
+            // Where the density is positive, Sample inverts Invert too.
+            if (wt::Pdf(t, k, l) > 1e-6) {
+                EXPECT_NEAR(wt::Sample(t, k, wt::Invert(t, k, l)), l, 1e-9) << "pdf" << k;
+            }
+        }
+    }
+}
+
+TEST(WavelengthTable, SamplesFollowThePdfChiSquare) {
+    const wt::Table t = AwkwardTable();
+    const int n = 200000;
+    for (int k = 0; k < 4; ++k) {
+        // Bins: every grid segment cut in 4; expected counts from integrating Pdf.
+        std::vector<double> edges;
+        for (size_t i = 0; i + 1 < t.grid.size(); ++i)
+            for (int j = 0; j < 4; ++j)
+                edges.push_back(t.grid[i] + (t.grid[i + 1] - t.grid[i]) * j / 4.0);
+        edges.push_back(t.grid.back());
+        std::vector<double> observed(edges.size() - 1, 0.0);
+        std::mt19937_64 rng(10 + k);
+        std::uniform_real_distribution<double> uni(0, 1);
+        for (int s = 0; s < n; ++s) {
+            const double l = wt::Sample(t, k, uni(rng));
+            ASSERT_GE(l, t.grid.front());
+            ASSERT_LE(l, t.grid.back());
+            const size_t b = std::upper_bound(edges.begin(), edges.end(), l) - edges.begin();
+            observed[std::min(b, edges.size() - 1) - 1] += 1;
+        }
+        // Pool bins (left to right) until each expects >= 5 samples; zero bins stay empty.
+        double chi2 = 0, obs = 0, expd = 0;
+        int dof = -1;
+        for (size_t b = 0; b < observed.size(); ++b) {
+            const double e = n * IntegratePdf(t, k, edges[b], edges[b + 1]);
+            if (e == 0) {
+                EXPECT_EQ(observed[b], 0) << "pdf" << k << " sampled a zero bin at " << edges[b];
+                continue;
+            }
+            obs += observed[b];
+            expd += e;
+            if (expd >= 5) {
+                chi2 += (obs - expd) * (obs - expd) / expd;
+                ++dof;
+                obs = expd = 0;
+            }
+        }
+        ASSERT_GT(dof, 5);
+        EXPECT_LT(chi2, ChiSquareLimit(dof)) << "pdf" << k << ": chi2 " << chi2 << ", dof " << dof;
+    }
+}
+
+TEST(WavelengthTable, DerivativeOfInvertIsPdf) {
+    const wt::Table t = AwkwardTable();
+    for (int k = 0; k < 4; ++k)
+        for (size_t i = 0; i + 1 < t.grid.size(); ++i) {
+            // The midpoint of each segment and two points near its ends.
+            for (double a : {0.1, 0.5, 0.9}) {
+                const double l = t.grid[i] + a * (t.grid[i + 1] - t.grid[i]);
+                const double h = 1e-4 * (t.grid[i + 1] - t.grid[i]);
+                const double fd = (wt::Invert(t, k, l + h) - wt::Invert(t, k, l - h)) / (2 * h);
+                EXPECT_NEAR(fd, wt::Pdf(t, k, l), 1e-6 * (1 + wt::Pdf(t, k, l)))
+                    << "pdf" << k << " at " << l;
+            }
+        }
+}
+
+TEST(WavelengthTable, AnalyticSegments) {
+    // Uniform density on [400, 500]: lambda = 400 + 100 u.
+    {
+        Values v = {{{1, 1}, {1, 1}, {1, 1}, {1, 1}}};
+        const wt::Table t = wt::MakeTable({400, 500}, v, "uniform");
+        for (double u : {0.0, 0.125, 0.5, 0.9, 1.0})
+            EXPECT_NEAR(wt::Sample(t, 0, u), 400 + 100 * u, 1e-12) << u;
+        EXPECT_DOUBLE_EQ(wt::Pdf(t, 0, 450), 0.01);
+    }
+    // Ramp from 0 on [0 + 400, 400 + 10]: p = 2 t / 100, F = t^2 / 100, t = 10 sqrt(u).
+    {
+        Values v = {{{0, 1}, {0, 1}, {0, 1}, {0, 1}}};
+        const wt::Table t = wt::MakeTable({400, 410}, v, "ramp");
+        for (double u : {1e-300, 1e-20, 1e-6, 0.01, 0.3, 0.99, 1.0}) {
+            const double want = 400 + 10 * std::sqrt(u);
+            EXPECT_NEAR(wt::Sample(t, 0, u), want, 1e-12 * want) << u;
+        }
+    }
+    // Falling to 0: p = 2 (10 - t) / 100, F = 1 - (10 - t)^2 / 100, t = 10 (1 - sqrt(1 - u)).
+    // Near the zero, lambda is ill-conditioned in u (d lambda / du = 1 / p), so the tolerance
+    // is a few rounding errors of u divided by the density there; u = 1 is exact.
+    {
+        Values v = {{{1, 0}, {1, 0}, {1, 0}, {1, 0}}};
+        const wt::Table t = wt::MakeTable({400, 410}, v, "fall");
+        for (double u : {0.0, 1e-12, 0.3, 0.999999, 1 - 1e-12, 1 - 1e-15}) {
+            const double want = 400 + 10 * (1 - std::sqrt(1 - u));
+            const double tol = 1e-12 * want + 4e-16 / wt::Pdf(t, 0, want);
+            EXPECT_NEAR(wt::Sample(t, 0, u), want, tol) << u;
+        }
+        EXPECT_EQ(wt::Sample(t, 0, 1.0), 410.0);
+        EXPECT_EQ(wt::Sample(t, 0, 0.0), 400.0);
+    }
+    // A nearly flat segment (slope 1e-12 relative) must not lose digits: t ~ r / p0.
+    {
+        Values v = {{{1, 1 + 1e-12}, {1, 1}, {1, 1}, {1, 1}}};
+        const wt::Table t = wt::MakeTable({400, 500}, v, "flat");
+        for (double u : {1e-15, 1e-9, 0.25, 0.75}) {
+            const double got = wt::Sample(t, 0, u) - 400;
+            EXPECT_NEAR(got, 100 * u, 1e-10 * 100 * u + 1e-13) << u;
+        }
+    }
+}
+
+TEST(WavelengthTable, ExtremeArguments) {
+    const wt::Table t = AwkwardTable();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (int k = 0; k < 4; ++k) {
+        EXPECT_EQ(wt::Sample(t, k, -1.0), wt::Sample(t, k, 0.0));
+        EXPECT_EQ(wt::Sample(t, k, nan), wt::Sample(t, k, 0.0));
+        EXPECT_EQ(wt::Sample(t, k, 2.0), wt::Sample(t, k, 1.0));
+        EXPECT_EQ(wt::Pdf(t, k, 379.999), 0.0);
+        EXPECT_EQ(wt::Pdf(t, k, 780.001), 0.0);
+        EXPECT_EQ(wt::Pdf(t, k, nan), 0.0);
+        EXPECT_EQ(wt::Invert(t, k, 100.0), 0.0);
+        EXPECT_EQ(wt::Invert(t, k, 1000.0), 1.0);
+        EXPECT_EQ(wt::Invert(t, k, nan), 0.0);
+        EXPECT_EQ(wt::Pdf(t, k, 380.0), t.pdf[k].front());
+        EXPECT_EQ(wt::Pdf(t, k, 780.0), t.pdf[k].back());
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Exact zeros.
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, ZeroDensityRegionsAreNeverSampled) {
+    const wt::Table t = AwkwardTable();
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> uni(0, 1);
+    for (int k = 0; k < 4; ++k)
+        for (int n = 0; n < 20000; ++n) {
+            const double u = uni(rng);
+            if (u == 0)
+                continue;
+            const double l = wt::Sample(t, k, u);
+            EXPECT_GT(wt::Pdf(t, k, l), 0.0) << "pdf" << k << " u=" << u << " lambda=" << l;
+        }
+    // pdf1 is zero on [380, 450] and [700, 780]: u = 0 and u = 1 map to the support's ends.
+    EXPECT_EQ(wt::Sample(t, 1, 0.0), 450.0);
+    EXPECT_EQ(wt::Sample(t, 1, 1.0), 700.0);
+    // pdf3 is zero on [650, 780].
+    EXPECT_EQ(wt::Sample(t, 3, 1.0), 650.0);
+    // pdf2 is zero on [500, 546.1]: F is flat there. u = F(500) selects the segment that
+    // starts at 546.1 (the last node with F <= u); the Python sampler does the same.
+    const double u = wt::Invert(t, 2, 500.0);
+    EXPECT_EQ(wt::Sample(t, 2, u), 546.1);
+    EXPECT_EQ(wt::Invert(t, 2, 546.1), u);
+    EXPECT_LT(wt::Sample(t, 2, std::nextafter(u, 0.0)), 500.0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Four wavelengths from one u, and the estimator they feed.
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, SampleFourUsesOneUAndTheMixtureDensity) {
+    const wt::Table t = AwkwardTable();
+    std::vector<double> us = {0.0, 0.01, 0.37, 0.5, 0.999, 1.0};
+    for (int k = 0; k < 4; ++k)  // u that put a wavelength exactly on a node
+        us.insert(us.end(), t.cdf[k].begin(), t.cdf[k].end());
+    for (double u : us) {
+        double lambda[4], pdf[4];
+        wt::SampleFour(t, u, lambda, pdf);
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_EQ(lambda[k], wt::Sample(t, k, u)) << "k=" << k << " u=" << u;
+            double mix = 0;
+            for (int j = 0; j < 4; ++j)
+                mix += wt::Pdf(t, j, lambda[k]);
+            // (SampleFour reuses the segment it sampled in; Pdf searches for it.)
+            EXPECT_NEAR(pdf[k], mix / 4, 1e-14 * mix) << "k=" << k << " u=" << u;
+            EXPECT_NEAR(pdf[k], wt::MixturePdf(t, lambda[k]), 1e-14 * mix);
+        }
+    }
+}
+
+// The packed layout for device memory: a view over a copy of Pack() gives the same numbers.
+TEST(WavelengthTable, PackedViewMatchesTheTable) {
+    const wt::Table t = AwkwardTable();
+    const std::vector<double> packed = wt::Pack(t);
+    ASSERT_EQ(packed.size(), 9 * t.grid.size());
+    const std::vector<double> device(packed);  // stands for a copy in GPU memory
+    const wt::TableView v = wt::ViewPacked(device.data(), static_cast<int>(t.grid.size()));
+    for (double u : {0.0, 1e-9, 0.2, 0.5, 0.77, 1 - 1e-12, 1.0}) {
+        double l1[4], p1[4], l2[4], p2[4];
+        wt::SampleFour(t, u, l1, p1);
+        wt::kernel::SampleFour(v, u, l2, p2);
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_EQ(l1[k], l2[k]) << "k=" << k << " u=" << u;
+            EXPECT_EQ(p1[k], p2[k]) << "k=" << k << " u=" << u;
+        }
+    }
+}
+
+namespace {
+
+// The renderer's estimate of the integral of f with stratified u: the mean over u of
+// (1/4) sum_j f(lambda_j) / pdf_j (samples with pdf_j = 0 count as 0).
+template <typename F>
+double EstimateIntegral(const wt::Table &t, F f, int n) {
+    double est = 0;
+    for (int s = 0; s < n; ++s) {
+        double lambda[4], pdf[4];
+        wt::SampleFour(t, (s + 0.5) / n, lambda, pdf);
+        for (int j = 0; j < 4; ++j)
+            if (pdf[j] > 0)
+                est += f(lambda[j]) / pdf[j] / 4;
+    }
+    return est / n;
+}
+
+// The integral of f over the grid range, counting only where `keep(lambda)` (midpoint rule).
+template <typename F, typename K>
+double Integral(const wt::Table &t, F f, K keep) {
+    double sum = 0;
+    for (size_t i = 0; i + 1 < t.grid.size(); ++i) {
+        const int m = 20000;
+        const double h = (t.grid[i + 1] - t.grid[i]) / m;
+        for (int j = 0; j < m; ++j) {
+            const double l = t.grid[i] + (j + 0.5) * h;
+            if (keep(l))
+                sum += f(l) * h;
+        }
+    }
+    return sum;
+}
+
+}  // namespace
+
+// The estimator is unbiased where the mixture is positive: every density of the awkward
+// table has zeros, but never all four at once.
+TEST(WavelengthTable, BalanceHeuristicEstimatorIsUnbiased) {
+    auto f = [](double l) {
+        return 0.2 + std::exp(-0.5 * std::pow((l - 546.0) / 0.05, 2)) +
+               0.5 * std::exp(-0.5 * std::pow((l - 611.0) / 3.0, 2));
+    };
+    const wt::Table t = AwkwardTable();
+    const double want = Integral(t, f, [](double) { return true; });
+    EXPECT_NEAR(EstimateIntegral(t, f, 400000), want, 1e-4 * want);
+}
+
+// Where the mixture is zero the estimator misses f (the bias the renderer warns about), and
+// the defensive mixture removes it. f vanishes at the edges of the gap: a density falling
+// linearly to zero there makes f / pdf unbounded (infinite variance), another reason for
+// the defensive share.
+TEST(WavelengthTable, ZeroMixtureBiasesAndTheDefensiveMixtureFixesIt) {
+    auto f = [](double l) {
+        return std::exp(-0.5 * std::pow((l - 510.0) / 1.5, 2)) +
+               0.5 * std::exp(-0.5 * std::pow((l - 611.0) / 3.0, 2));
+    };
+    const wt::Table t = TableWithMixtureGap();
+    const double all = Integral(t, f, [](double) { return true; });
+    const double support = Integral(t, f, [&](double l) { return wt::MixturePdf(t, l) > 0; });
+    ASSERT_LT(support, 0.7 * all) << "the test function must put mass into the gap";
+    EXPECT_NEAR(EstimateIntegral(t, f, 400000), support, 1e-4 * support);
+    EXPECT_NEAR(EstimateIntegral(wt::WithDefensiveMixture(t, 0.05), f, 400000), all, 1e-4 * all);
+}
+
+// ---------------------------------------------------------------------------------------
+// Zero mixture density and the defensive mixture.
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, ZeroMixtureIntervalsFindsTheGap) {
+    const auto gaps = wt::ZeroMixtureIntervals(TableWithMixtureGap());
+    ASSERT_EQ(gaps.size(), 1u);
+    EXPECT_EQ(gaps[0].first, 500.0);
+    EXPECT_EQ(gaps[0].second, 520.0);
+    // The awkward table has zeros in every density but never in all four together.
+    EXPECT_TRUE(wt::ZeroMixtureIntervals(AwkwardTable()).empty());
+    // Two separate gaps and an isolated zero node (not an interval).
+    Values v;
+    for (int k = 0; k < 4; ++k)
+        v[k] = {0, 0, 1, 0, 1, 0, 0, 0};
+    const auto two = wt::ZeroMixtureIntervals(
+        wt::MakeTable({380, 390, 400, 410, 420, 430, 440, 780}, v, "two"));
+    ASSERT_EQ(two.size(), 2u);
+    EXPECT_EQ(two[0], std::make_pair(380.0, 390.0));
+    EXPECT_EQ(two[1], std::make_pair(430.0, 780.0));
+}
+
+TEST(WavelengthTable, DefensiveMixtureRemovesZeroIntervals) {
+    const wt::Table t = TableWithMixtureGap();
+    const double range = t.grid.back() - t.grid.front();
+    for (double share : {1e-6, 0.05, 0.5, 1.0}) {
+        const wt::Table d = wt::WithDefensiveMixture(t, share);
+        EXPECT_TRUE(wt::ZeroMixtureIntervals(d).empty()) << share;
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_NEAR(IntegratePdf(d, k, 380, 780), 1.0, 1e-12);
+            for (double l : {380.0, 470.0, 510.0, 520.0, 700.0}) {
+                const double want = (1 - share) * wt::Pdf(t, k, l) + share / range;
+                EXPECT_NEAR(wt::Pdf(d, k, l), want, 1e-13 * want) << share << " " << l;
+                EXPECT_GT(wt::Pdf(d, k, l), 0.0);
+            }
+        }
+    }
+    // share 0 keeps the table.
+    const wt::Table same = wt::WithDefensiveMixture(t, 0.0);
+    for (int k = 0; k < 4; ++k)
+        for (size_t i = 0; i < t.grid.size(); ++i)
+            EXPECT_DOUBLE_EQ(same.pdf[k][i], t.pdf[k][i]);
+    for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()})
+        EXPECT_THROW(wt::WithDefensiveMixture(t, bad), wt::TableError) << bad;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading tables: both layouts.
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, BothLayoutsGiveTheSameTable) {
+    const Values v = WideValues();
+    const wt::Table a = wt::LoadTable(WriteFile("layout_csv.csv", CsvText(WideGrid(), v)));
+    const wt::Table b = wt::LoadTable(WriteFile("layout_wide.csv", WideText(v)));
+    ASSERT_EQ(a.grid, WideGrid());
+    ASSERT_EQ(b.grid, WideGrid());
+    for (int k = 0; k < 4; ++k) {
+        ASSERT_EQ(a.pdf[k].size(), 81u);
+        ASSERT_EQ(b.pdf[k].size(), 81u);
+        for (int i = 0; i < 81; ++i) {
+            EXPECT_EQ(a.pdf[k][i], b.pdf[k][i]) << k << " " << i;
+            EXPECT_EQ(a.cdf[k][i], b.cdf[k][i]) << k << " " << i;
+            // Renormalized, proportional to the values in the file.
+            EXPECT_NEAR(a.pdf[k][i] / v[k][i], a.pdf[k][0] / v[k][0], 1e-15);
+        }
+        EXPECT_NEAR(IntegratePdf(a, k, 380, 780), 1.0, 1e-12);
+    }
+    EXPECT_NE(a.source.find("layout_csv.csv"), std::string::npos);
+}
+
+TEST(WavelengthTable, ReaderToleratesCommentsBlankLinesCrlfAndSpaces) {
+    const std::string text =
+        "\xEF\xBB\xBF# a comment\r\n"
+        "   # an indented comment\r\n"
+        "\r\n"
+        "Lambda_nm, pdf0, pdf1, pdf2, pdf3\r\n"
+        "380, 1, 2, 0, 4\r\n"
+        "\r\n"
+        "# comment between rows\r\n"
+        "+400.5,1e0,2.,1,  4 ,\r\n"
+        "780,1,2,1,4\r\n";
+    std::istringstream in(text);
+    const wt::Table t = wt::ParseTable(in, "in-memory");
+    EXPECT_EQ(t.grid, (std::vector<double>{380, 400.5, 780}));
+    EXPECT_EQ(t.source, "in-memory");
+    EXPECT_EQ(t.pdf[2][0], 0.0);
+    EXPECT_NEAR(t.pdf[0][1], 1.0 / 400, 1e-15);
+}
+
+TEST(WavelengthTable, OldMacLineEndingsCountAsLines) {
+    std::istringstream in("# c\rlambda_nm,pdf0,pdf1,pdf2,pdf3\r380,1,1,1,1\r390,1,1,x,1\r");
+    try {
+        wt::ParseTable(in, "cr");
+        ADD_FAILURE() << "accepted 'x'";
+    } catch (const wt::TableError &e) {
+        EXPECT_EQ(std::string(e.what()), "cr:4: cannot parse number 'x'");
+    }
+}
+
+TEST(WavelengthTable, ParseTableNamesTheStream) {
+    std::istringstream in("lambda_nm,pdf0,pdf1,pdf2,pdf3\n380,1,1,1,1\n390,1,1,-1,1\n");
+    try {
+        wt::ParseTable(in, "stream-name");
+        ADD_FAILURE() << "accepted a negative value";
+    } catch (const wt::TableError &e) {
+        EXPECT_EQ(std::string(e.what()).rfind("stream-name:3: pdf2 is negative", 0), 0u)
+            << e.what();
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading tables: every reject class of SPEC section 2, with file, line and reason.
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, RejectsEveryClassWithFileLineAndReason) {
+    const std::string h = "# comment\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n";  // rows start at line 3
+    // NaN, infinity, negative values (also in the 4 x 81 layout).
+    ExpectRejected("nan.csv", h + "380,1,1,1,1\n390,1,nan,1,1\n", 4, "pdf1 is NaN at 390 nm");
+    ExpectRejected("nan_upper.csv", h + "380,1,1,1,NaN\n390,1,1,1,1\n", 3, "pdf3 is NaN");
+    ExpectRejected("inf.csv", h + "380,1,1,1,1\n390,1,1,1,1\n400,inf,1,1,1\n", 5,
+                   "pdf0 is infinite at 400 nm");
+    ExpectRejected("minus_inf.csv", h + "380,1,1,-Infinity,1\n390,1,1,1,1\n", 3, "infinite");
+    ExpectRejected("overflow.csv", h + "380,1,1,1,1\n390,1,1e400,1,1\n", 4,
+                   "pdf1 is infinite at 390 nm");
+    ExpectRejected("negative.csv", h + "380,1,1,1,1\n390,1,1,-0.5,1\n", 4,
+                   "pdf2 is negative (-0.5) at 390 nm");
+    ExpectRejected("grid_nan.csv", h + "380,1,1,1,1\nnan,1,1,1,1\n", 4, "wavelength is nan");
+    {
+        Values v = WideValues();
+        v[2][40] = -1;
+        ExpectRejected("negative_wide.csv", "# earlier work\n" + WideText(v), 4,
+                       "pdf2 is negative (-1) at 580 nm");
+        v = WideValues();
+        v[3][0] = std::numeric_limits<double>::quiet_NaN();
+        ExpectRejected("nan_wide.csv", WideText(v), 4, "pdf3 is NaN at 380 nm");
+    }
+    // A density zero everywhere.
+    ExpectRejected("zero.csv", h + "380,1,0,1,1\n390,1,0,1,1\n400,1,0,1,1\n", 3,
+                   "pdf1 is zero everywhere");
+    {
+        Values v = WideValues();
+        v[3].assign(81, 0.0);
+        ExpectRejected("zero_wide.csv", WideText(v), 4, "pdf3 is zero everywhere");
+    }
+    // A grid that is not strictly increasing.
+    ExpectRejected("repeated.csv", h + "380,1,1,1,1\n390,1,1,1,1\n390,1,1,1,1\n", 5,
+                   "grid is not strictly increasing (390 then 390 nm)");
+    ExpectRejected("repeated_decimal.csv", h + "546.1,1,1,1,1\n546.1,1,1,1,1\n", 4,
+                   "grid is not strictly increasing (546.1 then 546.1 nm)");
+    ExpectRejected("decreasing.csv", h + "380,1,1,1,1\n400,1,1,1,1\n390,1,1,1,1\n", 5,
+                   "grid is not strictly increasing (400 then 390 nm)");
+    // A column count other than 5 (rows and header).
+    ExpectRejected("four_columns.csv", h + "380,1,1,1,1\n390,1,1,1\n", 4,
+                   "4 columns, expected 5");
+    ExpectRejected("six_columns.csv", h + "380,1,1,1,1,1\n390,1,1,1,1\n", 3,
+                   "6 columns, expected 5");
+    ExpectRejected("header_columns.csv", "lambda_nm,pdf0,pdf1,pdf2\n380,1,1,1\n", 1,
+                   "header has 4 columns, expected 5");
+    // Fewer than 2 nodes.
+    ExpectRejected("one_node.csv", h + "380,1,1,1,1\n", 3, "at least 2 grid nodes, got 1");
+    ExpectRejected("header_only.csv", h, 2, "no data rows");
+    ExpectRejected("empty.csv", "", 1, "no data rows");
+    ExpectRejected("comments_only.csv", "# a\n# b\n# c\n", 3, "no data rows");
+    // A missing file, and a directory.
+    {
+        const std::string missing = TempPath("does_not_exist.csv");
+        std::filesystem::remove(missing);
+        try {
+            wt::LoadTable(missing);
+            ADD_FAILURE() << "a missing file was accepted";
+        } catch (const wt::TableError &e) {
+            EXPECT_EQ(std::string(e.what()), missing + ": no such file");
+        }
+        try {
+            wt::LoadTable(testing::TempDir());
+            ADD_FAILURE() << "a directory was accepted";
+        } catch (const wt::TableError &e) {
+            EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
+        }
+    }
+    // Ragged rows in the 4 x 81 layout, and a wrong number of rows.
+    {
+        Values v = WideValues();
+        v[2].pop_back();
+        ExpectRejected("ragged.csv", WideText(v), 3, "80 densities, expected 81");
+        v = WideValues();
+        v[1].push_back(1.0);
+        ExpectRejected("ragged_long.csv", "# c\n" + WideText(v), 3, "82 densities, expected 81");
+        v = WideValues();
+        std::string three = WideText(v);
+        three = three.substr(0, three.rfind('\n', three.size() - 2) + 1);  // drop the last row
+        ExpectRejected("three_rows.csv", three, 3, "3 rows of densities, expected 4");
+        ExpectRejected("five_rows.csv", WideText(v) + WideText(v).substr(0, WideText(v).find('\n') + 1),
+                       4, "5 rows of densities, expected 4");
+    }
+    // Text that is not a number, and an empty field.
+    ExpectRejected("text.csv", h + "380,1,1,1,1\n390,1,abc,1,1\n", 4, "cannot parse number 'abc'");
+    ExpectRejected("garbage.csv", h + "380,1,1,1,1\n390,1,1.5x,1,1\n", 4,
+                   "cannot parse number '1.5x'");
+    ExpectRejected("empty_field.csv", h + "380,1,1,1,1\n390,1,,1,1\n", 4,
+                   "cannot parse number ''");
+    ExpectRejected("second_header.csv", h + "380,1,1,1,1\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n", 4,
+                   "cannot parse number 'lambda_nm'");
+}
+
+// Mangled files (bytes deleted, duplicated or replaced) either load as a valid table or
+// throw TableError with the name; nothing else (no other exception, crash or hang).
+TEST(WavelengthTable, MangledInputIsRejectedOrValid) {
+    const std::string good = CsvText({380, 400, 450.5, 600, 780},
+                                     {{{1, 2, 3, 4, 5}, {0, 1, 0, 1, 0}, {1, 1, 1, 1, 1},
+                                       {5, 0, 0, 0, 1}}});
+    const std::string alphabet = "0123456789.,-+eE#\nnaifl \t";
+    std::mt19937 rng(7);
+    int accepted = 0, rejected = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        std::string text = trial % 2 ? good : WideText(WideValues());
+        const int edits = 1 + static_cast<int>(rng() % 4);
+        for (int e = 0; e < edits; ++e) {
+            const size_t at = rng() % text.size();
+            switch (rng() % 3) {
+            case 0: text.erase(at, 1 + rng() % 3); break;
+            case 1: text.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
+            default: text[at] = alphabet[rng() % alphabet.size()]; break;
+            }
+            if (text.empty())
+                text = "#";
+        }
+        std::istringstream in(text);
+        try {
+            const wt::Table t = wt::ParseTable(in, "mangled");
+            ++accepted;
+            ASSERT_GE(t.grid.size(), 2u);
+            for (size_t i = 1; i < t.grid.size(); ++i)
+                ASSERT_GT(t.grid[i], t.grid[i - 1]);
+            for (int k = 0; k < 4; ++k) {
+                ASSERT_EQ(t.cdf[k].back(), 1.0);
+                for (double p : t.pdf[k])
+                    ASSERT_TRUE(std::isfinite(p) && p >= 0) << text;
+            }
+        } catch (const wt::TableError &e) {
+            ++rejected;
+            ASSERT_EQ(std::string(e.what()).rfind("mangled", 0), 0u) << e.what();
+            ASSERT_FALSE(e.reason().empty());
+        }
+    }
+    // Both outcomes occur, so the mangling is neither too weak nor too strong.
+    EXPECT_GT(accepted, 100);
+    EXPECT_GT(rejected, 100);
+}
+
+TEST(WavelengthTable, MakeTableRejectsWithTheName) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    auto expect = [](std::vector<double> grid, Values v, const std::string &reason) {
+        try {
+            wt::MakeTable(grid, v, "my-table");
+            ADD_FAILURE() << "accepted, expected " << reason;
+        } catch (const wt::TableError &e) {
+            EXPECT_EQ(std::string(e.what()), "my-table: " + reason);
+        }
+    };
+    expect({380, 390}, {{{1, 1}, {1, nan}, {1, 1}, {1, 1}}}, "pdf1 is NaN at 390 nm");
+    expect({380, 390}, {{{1, 1}, {1, 1}, {0, 0}, {1, 1}}}, "pdf2 is zero everywhere");
+    expect({380}, {{{1}, {1}, {1}, {1}}}, "a table needs at least 2 grid nodes, got 1");
+    expect({380, 390}, {{{1, 1}, {1, 1}, {1}, {1, 1}}}, "pdf2 has 1 values, the grid has 2");
+    expect({390, 380}, {{{1, 1}, {1, 1}, {1, 1}, {1, 1}}},
+           "grid is not strictly increasing (390 then 380 nm)");
+    expect({380, 390}, {{{1e308, 1e308}, {1, 1}, {1, 1}, {1, 1}}},
+           "pdf0 integrates to infinity (values too large)");
+}
+
+// ---------------------------------------------------------------------------------------
+// The tables of earlier work (../shared, skipped when absent).
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, EveryReferenceTableLoads) {
+    const std::filesystem::path dir = std::filesystem::path(WT_SHARED_DIR) / "tables" / "reference-4x81";
+    if (!std::filesystem::is_directory(dir))
+        GTEST_SKIP() << dir << " is absent";
+    int count = 0;
+    for (const auto &entry : std::filesystem::directory_iterator(dir)) {
+        if (entry.path().extension() != ".csv")
+            continue;
+        ++count;
+        SCOPED_TRACE(entry.path().string());
+        wt::Table t;
+        ASSERT_NO_THROW(t = wt::LoadTable(entry.path().string()));
+        ASSERT_EQ(t.grid, WideGrid());
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_NEAR(IntegratePdf(t, k, 380, 780), 1.0, 1e-12);
+            for (double u : {0.001, 0.25, 0.5, 0.75, 0.999})
+                EXPECT_NEAR(wt::Invert(t, k, wt::Sample(t, k, u)), u, 1e-12);
+        }
+        // Whatever zero gaps a table has, the defensive mixture closes them.
+        EXPECT_TRUE(wt::ZeroMixtureIntervals(wt::WithDefensiveMixture(t, 0.01)).empty());
+    }
+    EXPECT_GE(count, 1) << "no .csv tables in " << dir;
+}
+
+// ---------------------------------------------------------------------------------------
+// Cross-language test vectors (issue 4, point 3): written by scripts/make_test_vectors.py
+// with optimizer/wavelength_pdf/sampling.py; C++ must agree to 1e-5 relative.
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+// Relative agreement with a tiny absolute floor for exact zeros.
+bool Agree(double got, double want, double rel) {
+    return std::abs(got - want) <= rel * std::max(std::abs(got), std::abs(want)) + 1e-300;
+}
+
+}  // namespace
+
+TEST(WavelengthTable, AgreesWithThePythonSamplerOnTestVectors) {
+    const std::string dir = WT_TEST_DATA_DIR;
+    const wt::Table t = wt::LoadTable(dir + "/vectors-table.csv");
+    std::ifstream in(dir + "/vectors.csv");
+    ASSERT_TRUE(in) << dir << "/vectors.csv is missing; run scripts/make_test_vectors.py";
+    std::string line;
+    int lineNo = 0, rows = 0;
+    bool sawZero = false, sawNearOne = false;
+    bool header = false;
+    while (std::getline(in, line)) {
+        ++lineNo;
+        if (line.empty() || line[0] == '#')
+            continue;
+        if (!header) {
+            EXPECT_EQ(line, "u,lambda0,lambda1,lambda2,lambda3,mixture_pdf0,mixture_pdf1,"
+                            "mixture_pdf2,mixture_pdf3");
+            header = true;
+            continue;
+        }
+        std::istringstream row(line);
+        row.imbue(std::locale::classic());
+        double v[9];
+        char comma;
+        for (int c = 0; c < 9; ++c) {
+            ASSERT_TRUE(row >> v[c]) << "vectors.csv:" << lineNo << ": column " << c;
+            if (c < 8) {
+                ASSERT_TRUE(row >> comma && comma == ',') << "vectors.csv:" << lineNo;
+            }
+        }
+        ++rows;
+        const double u = v[0];
+        sawZero = sawZero || u == 0.0;
+        sawNearOne = sawNearOne || (u > 1 - 1e-9 && u < 1.0);
+        double lambda[4], pdf[4];
+        wt::SampleFour(t, u, lambda, pdf);
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_PRED3(Agree, lambda[k], v[1 + k], 1e-5)
+                << "vectors.csv:" << lineNo << ": lambda" << k << " at u=" << Num(u);
+            EXPECT_PRED3(Agree, pdf[k], v[5 + k], 1e-5)
+                << "vectors.csv:" << lineNo << ": mixture_pdf" << k << " at u=" << Num(u);
+        }
+    }
+    EXPECT_TRUE(header);
+    EXPECT_GE(rows, 20);
+    EXPECT_TRUE(sawZero) << "the vectors must include u = 0";
+    EXPECT_TRUE(sawNearOne) << "the vectors must include a u just below 1";
+}
