@@ -1,0 +1,89 @@
+"""Running the renderer for the evaluation: one image per (scene, sampler, spp, seed).
+
+Each render is a subprocess of ``build/pbrt``; its wall-clock time (start-up and scene
+loading included, the same for every sampler) is what the error-against-time plots use.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[3]
+DEFAULT_PBRT = REPO / "build" / "pbrt"
+
+
+class RenderError(RuntimeError):
+    """The renderer failed; the message carries its stderr."""
+
+
+@dataclass(frozen=True)
+class Sampler:
+    """A wavelength sampler of the comparison and the renderer options that select it."""
+
+    name: str
+    label: str
+    args: tuple[str, ...]
+
+
+def samplers(table: Path | None, lo: float, hi: float) -> dict[str, Sampler]:
+    """The samplers of SPEC 6: the baseline, pbrt-v4's default and the table."""
+    out = {
+        "uniform": Sampler("uniform", f"stratified uniform {lo:g}-{hi:g} nm",
+                           ("--wavelength-sampling", "uniform", "--wavelength-range", f"{lo:g}", f"{hi:g}")),
+        "visible": Sampler("visible", "pbrt-v4 visible", ("--wavelength-sampling", "visible")),
+    }
+    if table is not None:
+        out["table"] = Sampler("table", "optimized table", ("--wavelength-pdf", str(table)))
+    return out
+
+
+@dataclass(frozen=True)
+class Render:
+    """A finished render: the image and how long it took."""
+
+    image: Path
+    seconds: float
+
+
+def file_digest(*paths: Path, extra: str = "") -> str:
+    """A short content hash of files and a string (cache keys)."""
+    h = hashlib.sha256(extra.encode())
+    for p in paths:
+        h.update(Path(p).read_bytes())
+    return h.hexdigest()[:16]
+
+
+def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
+           nthreads: int | None = None, pbrt: Path = DEFAULT_PBRT, cache: bool = True) -> Render:
+    """Render ``scene`` to ``out`` (EXR) unless an identical render is already there.
+
+    A JSON file beside the image records the inputs' digest and the render time, so a rerun
+    with the same scene, table, binary, sampler, spp and seed reuses it (resumable grids).
+    """
+    out = Path(out)
+    meta = out.with_suffix(".json")
+    inputs = [scene, pbrt] + ([Path(sampler.args[-1])] if sampler.name == "table" else [])
+    key = file_digest(*inputs, extra=json.dumps([sampler.args, spp, seed]))
+    if cache and out.is_file() and meta.is_file():
+        m = json.loads(meta.read_text())
+        if m.get("key") == key:
+            return Render(out, float(m["seconds"]))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    cmd = [str(pbrt), "--quiet", "--spp", str(spp), "--seed", str(seed), *sampler.args,
+           "--outfile", str(out)]
+    if nthreads:
+        cmd += ["--nthreads", str(nthreads)]
+    cmd.append(str(scene))
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0 or not out.is_file():
+        raise RenderError(f"{' '.join(cmd)} failed (exit {proc.returncode}):\n{proc.stderr.strip()}")
+    meta.write_text(json.dumps({"key": key, "seconds": seconds, "command": cmd,
+                                "cpus": os.cpu_count()}, indent=1))
+    return Render(out, seconds)

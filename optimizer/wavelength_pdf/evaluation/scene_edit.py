@@ -1,0 +1,126 @@
+"""A copy of a pbrt-v4 scene lit by another spectrum, for the evaluation (SPEC 6).
+
+The copy is written elsewhere (../shared is read-only), so every file the scene names
+(Include/Import, meshes, textures, spectrum files) is rewritten to an absolute path. Every
+emitter's ``L``/``I`` (spectrum, rgb or blackbody) becomes the given spectrum, inline and cut to
+the evaluation's wavelength range, so that every sampler of the comparison integrates the same
+thing; its "scale" is kept (pbrt-v4 normalizes the spectrum to 1 nit before scaling it). The
+film's resolution can be overridden to fit a small machine.
+
+Statements are found with the optimizer's own pbrt tokenizer (``scene_spectra``); only the
+spans of the tokens that change are replaced, so everything else stays byte for byte.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from wavelength_pdf.scene_spectra import Token, split_params, statements, tokenize
+from wavelength_pdf.spectra import Spectrum, SpectrumError
+
+#: Parameters whose string value names a file, relative to the file that names it.
+_FILE_PARAMS = {"filename", "mapname", "lensfile", "bsdffile"}
+_INTENSITY_LIGHTS = {"point", "spot", "goniometric", "projection"}
+#: Directives with a parameter list, and how many quoted arguments come before it.
+_WITH_PARAMS = {d: 1 for d in ("Shape", "LightSource", "AreaLightSource", "Material", "MakeNamedMaterial",
+                               "Film", "Camera", "Sampler", "Integrator", "PixelFilter", "Accelerator",
+                               "MakeNamedMedium", "Attribute")}
+_WITH_PARAMS["Texture"] = 3
+
+
+def inline_spectrum(spectrum: Spectrum, lo: float, hi: float) -> str:
+    """``[ lambda value ... ]`` of a spectrum cut to [lo, hi] (exact at lo and hi)."""
+    lam = spectrum.wavelengths
+    inside = (lam > lo) & (lam < hi)
+    grid = np.concatenate([[lo], lam[inside], [hi]])
+    values = np.interp(grid, lam, spectrum.values, left=0.0, right=0.0)
+    if not np.any(values > 0):
+        raise SpectrumError(f"{spectrum.source}: no energy inside {lo:g}-{hi:g} nm")
+    return "[ " + " ".join(f"{w:.10g} {v:.10g}" for w, v in zip(grid, values)) + " ]"
+
+
+def _span(tokens: list[Token]) -> tuple[int, int]:
+    return tokens[0].start, tokens[-1].end
+
+
+def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
+               lo: float = 380.0, hi: float = 780.0,
+               resolution: tuple[int, int] | None = None) -> Path:
+    """Write a copy of ``scene`` at ``out`` lit by ``spectrum`` (None: keep the emitters).
+
+    Included files are inlined into the copy's folder as edited copies of their own, so that
+    emitters and file names inside them are handled the same way.
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
+    scene, out = Path(scene).resolve(), Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, depth=0)
+    tmp = out.with_suffix(out.suffix + ".tmp")
+    tmp.write_text(body)
+    tmp.replace(out)
+    return out
+
+
+def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, hi: float,
+               resolution: tuple[int, int] | None, depth: int) -> str:
+    if depth > 32:
+        raise SpectrumError(f"{path}: Include nesting deeper than 32 (a cycle?)")
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise SpectrumError(f"{path}: cannot read ({e.strerror})") from None
+    edits: list[tuple[int, int, str]] = []
+    here = path.parent
+
+    def absolute(tok: Token) -> None:
+        p = Path(tok.text)
+        if not p.is_absolute() and (here / p).exists():
+            edits.append((tok.start, tok.end, '"' + str((here / p).resolve()) + '"'))
+
+    for st in statements(tokenize(text, path)):
+        d = st.directive.text
+        if d in ("Include", "Import") and st.items and isinstance(st.items[0], Token):
+            arg = st.items[0]
+            child = (here / arg.text).resolve()
+            name = f"include-{depth + 1}-{abs(hash(str(child))) % 10**8}.pbrt"
+            (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, depth + 1))
+            edits.append((arg.start, arg.end, f'"{outdir / name}"'))
+            continue
+        if d not in _WITH_PARAMS:
+            continue
+        split_params(st, _WITH_PARAMS[d])
+        type_ = st.args[0].text if st.args and st.args[0].kind == "str" else ""
+        emitting = spectrum is not None and d in ("LightSource", "AreaLightSource")
+        pname = "I" if d == "LightSource" and type_ in _INTENSITY_LIGHTS else "L"
+        replaced = False
+        for p in st.params:
+            if emitting and p.name == pname and p.type in ("spectrum", "rgb", "blackbody"):
+                start, end = p.decl.start, (p.values[-1].end if p.values else p.decl.end)
+                # Include a closing bracket right after the last value.
+                if text[end:].lstrip().startswith("]"):
+                    end = text.index("]", end) + 1
+                edits.append((start, end, f'"spectrum {pname}" {inline_spectrum(spectrum, lo, hi)}'))
+                replaced = True
+            elif d == "Film" and resolution and p.name in ("xresolution", "yresolution") and p.values:
+                value = resolution[0] if p.name == "xresolution" else resolution[1]
+                edits.append((*_span(p.values), str(value)))
+            elif p.type == "string" and p.name in _FILE_PARAMS and p.values:
+                absolute(p.values[0])
+            elif p.type == "spectrum" and p.values and p.values[0].kind == "str":
+                absolute(p.values[0])
+        if emitting and not replaced:
+            # No L/I given (the colour space's illuminant): add the spectrum after the type.
+            anchor = st.args[0].end if st.args else st.directive.end
+            edits.append((anchor, anchor, f' "spectrum {pname}" {inline_spectrum(spectrum, lo, hi)}'))
+        if d == "Film" and resolution and not any(p.name == "xresolution" for p in st.params):
+            anchor = st.args[0].end if st.args else st.directive.end
+            edits.append((anchor, anchor, f' "integer xresolution" [ {resolution[0]} ] '
+                                          f'"integer yresolution" [ {resolution[1]} ]'))
+    for start, end, new in sorted(edits, key=lambda e: e[0], reverse=True):
+        text = text[:start] + new + text[end:]
+    return text
