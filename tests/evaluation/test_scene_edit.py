@@ -1,0 +1,66 @@
+"""The evaluation's scene copy: every emitter lit by the given spectrum (cut to the range),
+files named by absolute path, the film's resolution overridden, the rest untouched."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wavelength_pdf.evaluation.scene_edit import edit_scene, inline_spectrum
+from wavelength_pdf.scene_spectra import scan_scene
+from wavelength_pdf.spectra import Spectrum, SpectrumError
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "scenes"
+LAMP = Spectrum("lamp", "test", np.array([300.0, 400.0, 546.0, 547.0, 548.0, 900.0]),
+                np.array([5.0, 1.0, 0.0, 7.0, 0.0, 5.0]))
+
+
+def test_every_emitter_gets_the_spectrum_cut_to_the_range(tmp_path: Path) -> None:
+    out = edit_scene(DATA / "several.pbrt", LAMP, tmp_path / "copy.pbrt", lo=380, hi=780)
+    emitters = scan_scene(out)
+    # Every emitter of the original (including the RGB point light and the Included file's)
+    # now carries the lamp, and nothing outside 380-780 nm.
+    assert len(emitters) == len(scan_scene(DATA / "several.pbrt"))
+    lam = np.linspace(380, 780, 801)
+    want = np.interp(lam, LAMP.wavelengths, LAMP.values)
+    for em in emitters:
+        sp = em.spectrum
+        assert sp is not None, em.reason
+        got = np.interp(lam, sp.wavelengths, sp.values, left=0, right=0)
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12, err_msg=em.where)
+        assert np.interp(379.0, sp.wavelengths, sp.values, left=0, right=0) == 0
+        assert np.interp(781.0, sp.wavelengths, sp.values, left=0, right=0) == 0
+
+
+def test_film_resolution_and_file_paths(tmp_path: Path) -> None:
+    src = tmp_path / "src"
+    (src / "models").mkdir(parents=True)
+    (src / "models" / "m.ply").write_text("ply\n")
+    scene = src / "s.pbrt"
+    scene.write_text('Film "rgb" "integer xresolution" [ 640 ] "string filename" "x.exr"\n'
+                     '    "integer yresolution" [ 480 ]\n'
+                     'WorldBegin\n'
+                     'AttributeBegin\n  AreaLightSource "diffuse" "rgb L" [ 1 1 1 ] "float scale" [ 3 ]\n'
+                     '  Shape "plymesh" "string filename" "models/m.ply"\nAttributeEnd\n'
+                     'Shape "sphere" "float radius" [ 2 ]  # untouched\n')
+    out = edit_scene(scene, LAMP, tmp_path / "out" / "copy.pbrt", resolution=(32, 24))
+    text = out.read_text()
+    assert '"integer xresolution" [ 32 ]' in text and '"integer yresolution" [ 24 ]' in text
+    assert f'"{(src / "models" / "m.ply").resolve()}"' in text
+    assert '"float scale" [ 3 ]' in text and 'Shape "sphere" "float radius" [ 2 ]  # untouched' in text
+    assert '"rgb L"' not in text and '"spectrum L" [ 380 ' in text
+
+
+def test_resolution_added_when_the_film_has_none(tmp_path: Path) -> None:
+    scene = tmp_path / "s.pbrt"
+    scene.write_text('Film "rgb"\nWorldBegin\nLightSource "point" "spectrum I" [ 400 1 700 1 ]\n')
+    text = edit_scene(scene, None, tmp_path / "c.pbrt", resolution=(8, 6)).read_text()
+    assert '"integer xresolution" [ 8 ] "integer yresolution" [ 6 ]' in text
+    assert '"spectrum I" [ 400 1 700 1 ]' in text  # spectrum None keeps the emitters
+
+
+def test_a_spectrum_without_energy_in_range_is_an_error(tmp_path: Path) -> None:
+    dark = Spectrum("ir", "test", np.array([800.0, 900.0]), np.array([1.0, 1.0]))
+    with pytest.raises(SpectrumError, match="no energy inside 380-780"):
+        inline_spectrum(dark, 380, 780)
