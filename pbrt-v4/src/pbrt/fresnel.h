@@ -1,0 +1,81 @@
+// Specular scattering at a smooth interface: the mirror and refraction directions and the
+// Fresnel reflectance of dielectrics and conductors (unpolarized light: the mean of the
+// parallel and perpendicular amplitude reflectances squared). Directions are unit vectors
+// pointing away from the surface; n is the (micro)surface normal. See the pbrt book, 4th
+// ed., sections 9.3 (specular reflection/refraction) and 9.5 (Fresnel equations).
+#pragma once
+
+#include <pbrt/spectrum.h>
+#include <pbrt/vecmath.h>
+
+#include <complex>
+
+namespace pbrt {
+
+// Mirror direction of wo about n.
+inline Vector3f Reflect(const Vector3f &wo, const Vector3f &n) { return -wo + 2 * Dot(wo, n) * n; }
+
+// Refraction of wi through a surface with normal n. eta is the relative index of
+// refraction eta_t / eta_i for light arriving from the side n points to; wi on the other
+// side sees 1/eta. Returns false on total internal reflection; otherwise *wt is the
+// refracted direction and *etap the relative IOR actually used.
+inline bool Refract(const Vector3f &wi, Vector3f n, Float eta, Float *etap, Vector3f *wt) {
+    Float cosTheta_i = Dot(n, wi);
+    // Coming from below: flip the interface so that wi is "above".
+    if (cosTheta_i < 0) {
+        eta = 1 / eta;
+        cosTheta_i = -cosTheta_i;
+        n = -n;
+    }
+    // Snell's law on sines; sin^2 >= 1 means total internal reflection.
+    Float sin2Theta_i = std::max<Float>(0, 1 - Sqr(cosTheta_i));
+    Float sin2Theta_t = sin2Theta_i / Sqr(eta);
+    if (sin2Theta_t >= 1) return false;
+    Float cosTheta_t = SafeSqrt(1 - sin2Theta_t);
+    *wt = -wi / eta + (cosTheta_i / eta - cosTheta_t) * n;
+    if (etap) *etap = eta;
+    return true;
+}
+
+// Fresnel reflectance of a dielectric interface with relative IOR eta (transmitted side
+// over incident side for cosTheta_i > 0). cosTheta_i < 0 means the light arrives from the
+// other side, which sees 1/eta; total internal reflection gives 1.
+inline Float FrDielectric(Float cosTheta_i, Float eta) {
+    cosTheta_i = Clamp(cosTheta_i, -1, 1);
+    if (cosTheta_i < 0) {
+        eta = 1 / eta;
+        cosTheta_i = -cosTheta_i;
+    }
+    Float sin2Theta_t = (1 - Sqr(cosTheta_i)) / Sqr(eta);
+    if (sin2Theta_t >= 1) return 1;
+    Float cosTheta_t = SafeSqrt(1 - sin2Theta_t);
+    Float rParallel = (eta * cosTheta_i - cosTheta_t) / (eta * cosTheta_i + cosTheta_t);
+    Float rPerpendicular = (cosTheta_i - eta * cosTheta_t) / (cosTheta_i + eta * cosTheta_t);
+    return (Sqr(rParallel) + Sqr(rPerpendicular)) / 2;
+}
+
+// Fresnel reflectance of a conductor with complex relative IOR eta = n + i k, for light
+// arriving from the dielectric side (cosTheta_i is clamped to [0, 1]). The same
+// amplitude formulas as the dielectric case, with complex arithmetic; no total internal
+// reflection is possible.
+inline Float FrComplex(Float cosTheta_i, std::complex<Float> eta) {
+    using Complex = std::complex<Float>;
+    cosTheta_i = Clamp(cosTheta_i, 0, 1);
+    Float sin2Theta_i = 1 - Sqr(cosTheta_i);
+    Complex sin2Theta_t = sin2Theta_i / (eta * eta);
+    Complex cosTheta_t = std::sqrt(Float(1) - sin2Theta_t);
+    Complex rParallel = (eta * cosTheta_i - cosTheta_t) / (eta * cosTheta_i + cosTheta_t);
+    Complex rPerpendicular = (cosTheta_i - eta * cosTheta_t) / (cosTheta_i + eta * cosTheta_t);
+    return (std::norm(rParallel) + std::norm(rPerpendicular)) / 2;
+}
+
+// FrComplex at each of the sampled wavelengths (eta and k per wavelength).
+inline SampledSpectrum FrComplex(Float cosTheta_i, const SampledSpectrum &eta,
+                                 const SampledSpectrum &k) {
+    SampledSpectrum r;
+    for (int i = 0; i < NSpectrumSamples; ++i)
+        r[i] = FrComplex(cosTheta_i, std::complex<Float>(eta[i], k[i]));
+    return r;
+}
+
+}  // namespace pbrt
