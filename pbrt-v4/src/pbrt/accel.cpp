@@ -1,0 +1,271 @@
+#include <pbrt/accel.h>
+
+#include <embree3/rtcore.h>
+
+#include <cstring>
+#include <limits>
+#include <string>
+
+namespace pbrt {
+
+namespace {
+
+void EmbreeErrorCallback(void *, RTCError code, const char *str) {
+    // Errors at build time become exceptions in Commit/Add*; here we only remember them.
+    (void)code;
+    Warning(std::string("Embree: ") + (str ? str : "unknown error"));
+}
+
+struct Record {
+    enum class Kind { Mesh, Sphere, Instance } kind;
+    int index;        // mesh, sphere, or instance index (for Instance: into instances)
+    int material;
+    int lightOffset;
+};
+
+struct Object {
+    RTCScene scene = nullptr;
+    std::vector<std::shared_ptr<TriangleMesh>> meshes;
+    std::vector<std::unique_ptr<Sphere>> spheres;
+    std::vector<Record> records;  // indexed by Embree geometry ID
+    bool committed = false;
+};
+
+struct Instance {
+    int object;
+    Transform renderFromInstance;
+};
+
+// --- Sphere user-geometry callbacks --------------------------------------------------------
+void SphereBoundsFunc(const RTCBoundsFunctionArguments *args) {
+    const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
+    Bounds3f b = s->renderFromObject.ApplyBounds(s->ObjectBounds());
+    // Pad a little: the bounds must contain every point the intersection test can return.
+    Vector3f pad = (Abs(b.pMin) + Abs(b.pMax)) * 1e-6f;
+    args->bounds_o->lower_x = b.pMin.x - pad.x;
+    args->bounds_o->lower_y = b.pMin.y - pad.y;
+    args->bounds_o->lower_z = b.pMin.z - pad.z;
+    args->bounds_o->upper_x = b.pMax.x + pad.x;
+    args->bounds_o->upper_y = b.pMax.y + pad.y;
+    args->bounds_o->upper_z = b.pMax.z + pad.z;
+}
+
+void SphereIntersectFunc(const RTCIntersectFunctionNArguments *args) {
+    if (args->N != 1 || !args->valid[0]) return;
+    const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
+    RTCRayHit *rh = reinterpret_cast<RTCRayHit *>(args->rayhit);
+    Point3f o = s->objectFromRender.ApplyPoint(Point3f(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z));
+    Vector3f d = s->objectFromRender.ApplyVector(Vector3f(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z));
+    Float t;
+    if (!s->IntersectObject(o, d, rh->ray.tfar, &t) || t <= rh->ray.tnear) return;
+    rh->ray.tfar = t;
+    rh->hit.u = rh->hit.v = 0;
+    rh->hit.Ng_x = rh->hit.Ng_y = 0;
+    rh->hit.Ng_z = 1;
+    rh->hit.primID = args->primID;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+}
+
+void SphereOccludedFunc(const RTCOccludedFunctionNArguments *args) {
+    if (args->N != 1 || !args->valid[0]) return;
+    const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
+    RTCRay *r = reinterpret_cast<RTCRay *>(args->ray);
+    Point3f o = s->objectFromRender.ApplyPoint(Point3f(r->org_x, r->org_y, r->org_z));
+    Vector3f d = s->objectFromRender.ApplyVector(Vector3f(r->dir_x, r->dir_y, r->dir_z));
+    Float t;
+    if (s->IntersectObject(o, d, r->tfar, &t) && t > r->tnear) r->tfar = -Infinity;
+}
+
+}  // namespace
+
+struct Accelerator::Impl {
+    RTCDevice device = nullptr;
+    std::vector<Object> objects;
+    std::vector<Instance> instances;
+
+    RTCScene NewScene() {
+        RTCScene s = rtcNewScene(device);
+        rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
+        return s;
+    }
+    void Check(const char *what) {
+        RTCError e = rtcGetDeviceError(device);
+        if (e != RTC_ERROR_NONE) throw PbrtError(std::string("Embree error while ") + what +
+                                                 " (code " + std::to_string(int(e)) + ")");
+    }
+};
+
+Accelerator::Accelerator() : impl(new Impl) {
+    impl->device = rtcNewDevice(nullptr);
+    if (!impl->device) throw PbrtError("could not create the Embree device");
+    rtcSetDeviceErrorFunction(impl->device, EmbreeErrorCallback, nullptr);
+    impl->objects.emplace_back();
+    impl->objects[0].scene = impl->NewScene();
+}
+
+Accelerator::~Accelerator() {
+    for (Object &o : impl->objects)
+        if (o.scene) rtcReleaseScene(o.scene);
+    if (impl->device) rtcReleaseDevice(impl->device);
+}
+
+int Accelerator::NewObject() {
+    impl->objects.emplace_back();
+    impl->objects.back().scene = impl->NewScene();
+    return int(impl->objects.size()) - 1;
+}
+
+bool Accelerator::ObjectIsEmpty(int object) const { return impl->objects[object].records.empty(); }
+
+void Accelerator::AddMesh(int object, std::shared_ptr<TriangleMesh> mesh, int material,
+                          int lightOffset) {
+    Object &obj = impl->objects[object];
+    RTCGeometry g = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Embree's own buffers (they carry the padding Embree's SIMD loads need).
+    float *v = static_cast<float *>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh->p.size()));
+    for (size_t i = 0; i < mesh->p.size(); ++i) {
+        v[3 * i] = mesh->p[i].x;
+        v[3 * i + 1] = mesh->p[i].y;
+        v[3 * i + 2] = mesh->p[i].z;
+    }
+    unsigned *idx = static_cast<unsigned *>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh->NumTriangles()));
+    std::memcpy(idx, mesh->indices.data(), mesh->indices.size() * sizeof(unsigned));
+    rtcCommitGeometry(g);
+    unsigned id = rtcAttachGeometry(obj.scene, g);
+    rtcReleaseGeometry(g);
+    impl->Check("adding a triangle mesh");
+    if (id != obj.records.size()) throw PbrtError("internal error: unexpected Embree geometry ID");
+    obj.records.push_back({Record::Kind::Mesh, int(obj.meshes.size()), material, lightOffset});
+    obj.meshes.push_back(std::move(mesh));
+}
+
+void Accelerator::AddSphere(int object, const Sphere &sphere, int material, int lightOffset) {
+    Object &obj = impl->objects[object];
+    obj.spheres.push_back(std::make_unique<Sphere>(sphere));
+    RTCGeometry g = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, 1);
+    rtcSetGeometryUserData(g, obj.spheres.back().get());
+    rtcSetGeometryBoundsFunction(g, SphereBoundsFunc, nullptr);
+    rtcSetGeometryIntersectFunction(g, SphereIntersectFunc);
+    rtcSetGeometryOccludedFunction(g, SphereOccludedFunc);
+    rtcCommitGeometry(g);
+    unsigned id = rtcAttachGeometry(obj.scene, g);
+    rtcReleaseGeometry(g);
+    impl->Check("adding a sphere");
+    if (id != obj.records.size()) throw PbrtError("internal error: unexpected Embree geometry ID");
+    obj.records.push_back({Record::Kind::Sphere, int(obj.spheres.size()) - 1, material, lightOffset});
+}
+
+void Accelerator::AddInstance(int object, const Transform &renderFromInstance) {
+    Object &obj = impl->objects[object];
+    if (obj.records.empty()) return;
+    if (!obj.committed) {
+        rtcCommitScene(obj.scene);
+        impl->Check("building an object instance's BVH");
+        obj.committed = true;
+    }
+    Object &top = impl->objects[0];
+    RTCGeometry g = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, obj.scene);
+    // 3x4 column-major: the three columns of the linear part, then the translation.
+    const SquareMatrix4 &m = renderFromInstance.Matrix();
+    float xfm[12];
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r) xfm[c * 3 + r] = m.m[r][c];
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+    rtcCommitGeometry(g);
+    unsigned id = rtcAttachGeometry(top.scene, g);
+    rtcReleaseGeometry(g);
+    impl->Check("adding an object instance");
+    if (id != top.records.size()) throw PbrtError("internal error: unexpected Embree geometry ID");
+    top.records.push_back({Record::Kind::Instance, int(impl->instances.size()), -1, -1});
+    impl->instances.push_back({object, renderFromInstance});
+}
+
+void Accelerator::Commit() {
+    rtcCommitScene(impl->objects[0].scene);
+    impl->Check("building the BVH");
+    RTCBounds b;
+    rtcGetSceneBounds(impl->objects[0].scene, &b);
+    bounds = Bounds3f();
+    if (b.lower_x <= b.upper_x)
+        bounds = Bounds3f(Point3f(b.lower_x, b.lower_y, b.lower_z), Point3f(b.upper_x, b.upper_y, b.upper_z));
+}
+
+bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
+    rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
+    rh.ray.tnear = 0;
+    rh.ray.tfar = ray.tMax;
+    rh.ray.time = 0;
+    rh.ray.mask = 0xffffffffu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl->objects[0].scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+    // Find the shape: directly in the top level, or inside an instance.
+    const Transform *xf = nullptr;
+    const Object *obj = &impl->objects[0];
+    if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+        const Instance &inst = impl->instances[impl->objects[0].records[rh.hit.instID[0]].index];
+        xf = &inst.renderFromInstance;
+        obj = &impl->objects[inst.object];
+    }
+    const Record &rec = obj->records[rh.hit.geomID];
+    Float t = rh.ray.tfar;
+    if (rec.kind == Record::Kind::Mesh) {
+        obj->meshes[rec.index]->Interaction(rh.hit.primID, rh.hit.u, rh.hit.v, si);
+    } else {
+        const Sphere &s = *obj->spheres[rec.index];
+        Ray local = xf ? Inverse(*xf).ApplyRay(ray) : ray;
+        s.Interaction(s.objectFromRender.ApplyPoint(local(t)), si);
+    }
+    if (xf) {
+        // Instance space to world space.
+        Point3f p = xf->ApplyPoint(si->p);
+        const SquareMatrix4 &m = xf->Matrix();
+        Vector3f err;
+        for (int i = 0; i < 3; ++i)
+            err[i] = std::abs(m.m[i][0]) * si->pError.x + std::abs(m.m[i][1]) * si->pError.y +
+                     std::abs(m.m[i][2]) * si->pError.z + 2e-6f * (std::abs(p[i]) + std::abs(m.m[i][3]));
+        si->p = p;
+        si->pError = err;
+        si->n = Normalize(xf->ApplyNormal(si->n));
+        si->ns = Normalize(xf->ApplyNormal(si->ns));
+        si->dpdu = xf->ApplyVector(si->dpdu);
+    }
+    si->tHit = t;
+    si->wo = -Normalize(ray.d);
+    si->material = rec.material;
+    si->areaLight = rec.lightOffset < 0 ? -1
+                    : rec.lightOffset + (rec.kind == Record::Kind::Mesh ? int(rh.hit.primID) : 0);
+    return true;
+}
+
+bool Accelerator::Occluded(const Ray &ray) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r;
+    r.org_x = ray.o.x; r.org_y = ray.o.y; r.org_z = ray.o.z;
+    r.dir_x = ray.d.x; r.dir_y = ray.d.y; r.dir_z = ray.d.z;
+    r.tnear = 0;
+    r.tfar = ray.tMax;
+    r.time = 0;
+    r.mask = 0xffffffffu;
+    r.id = 0;
+    r.flags = 0;
+    rtcOccluded1(impl->objects[0].scene, &ctx, &r);
+    return r.tfar < 0;
+}
+
+}  // namespace pbrt

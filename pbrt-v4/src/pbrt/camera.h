@@ -1,0 +1,54 @@
+// Cameras: "perspective" and "orthographic" with an optional thin lens.
+//
+// pbrt conventions: camera space looks down +z with +y up and +x to the right of the image;
+// the scene's CTM at the Camera directive is camera-from-world. The screen window defaults to
+// [-a, a] x [-1, 1] for an aspect ratio a = x/y >= 1 (else [-1, 1] x [-1/a, 1/a]), so "fov"
+// is the field of view of the shorter image axis. Raster (0, 0) is the top-left corner of
+// the full-resolution image; raster y grows downwards while screen y grows upwards.
+#pragma once
+
+#include <pbrt/ray.h>
+#include <pbrt/transform.h>
+#include <pbrt/vecmath.h>
+
+#include <string>
+
+namespace pbrt {
+
+class ParameterDictionary;
+
+class Camera {
+  public:
+    enum class Type { Perspective, Orthographic };
+
+    // screenWindow = {xmin, xmax, ymin, ymax}; fovDegrees is ignored for Orthographic.
+    Camera(Type type, const Transform &worldFromCamera, Point2i fullResolution,
+           const Float screenWindow[4], Float fovDegrees, Float lensRadius = 0,
+           Float focalDistance = 1e6f, Float shutterOpen = 0, Float shutterClose = 1);
+
+    // From a Camera directive. cameraFromWorld is the CTM at the directive; the film's full
+    // resolution (after command-line overrides) gives the default aspect ratio.
+    static Camera Create(const std::string &name, const ParameterDictionary &params,
+                         const Transform &cameraFromWorld, Point2i fullResolution,
+                         const FileLoc &loc);
+
+    // The screen window that pbrt-v4 uses by default for a frame aspect ratio.
+    static void DefaultScreenWindow(Float frameAspect, Float screen[4]);
+
+    // A world-space ray with a normalized direction through raster point pFilm; uLens
+    // samples the lens (unused for a pinhole).
+    Ray GenerateRay(Point2f pFilm, Point2f uLens) const;
+
+    const Transform &WorldFromCamera() const { return worldFromCamera; }
+    Float ExposureTime() const { return shutterClose - shutterOpen; }
+    std::string Description() const;
+
+  private:
+    Type type;
+    Transform worldFromCamera;
+    Point2i resolution;
+    Float screen[4];
+    Float fov, tanHalfFov, lensRadius, focalDistance, shutterOpen, shutterClose;
+};
+
+}  // namespace pbrt

@@ -1,0 +1,158 @@
+// pbrt: renders pbrt-v4 scene files with the spectral path tracer.
+#include <pbrt/options.h>
+#include <pbrt/render.h>
+#include <pbrt/scene.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+using namespace pbrt;
+
+namespace {
+
+const char *kUsage = R"(usage: pbrt [options] scene.pbrt...   (standard input if no file)
+
+Rendering:
+  --spp N                      samples per pixel (overrides the scene's "pixelsamples")
+  --seed N                     seed of the sampler (overrides the scene's)
+  --maxdepth N                 maximum path depth (overrides the integrator's "maxdepth")
+  --nthreads N                 number of threads (default: all cores)
+Output:
+  --outfile FILE               image to write (.exr: linear 32-bit float; .png: sRGB 8-bit);
+                               default: the film's "filename"
+  --resolution WxH             render at W x H pixels instead of the film's resolution
+  --resolution-scale S         multiply the film's (or --resolution's) resolution by S
+Wavelengths (four per path from one random number):
+  --wavelength-sampling NAME   visible  pbrt-v4's visible sampling over 360-830 nm (default)
+                               uniform  stratified uniform over --wavelength-range
+  --wavelength-range LO HI     range of uniform sampling in nm (default 360 830)
+Other:
+  --quiet                      no progress bar or summary
+  --help                       this text
+)";
+
+[[noreturn]] void Usage(const std::string &msg) {
+    if (!msg.empty()) std::fprintf(stderr, "pbrt: %s\n", msg.c_str());
+    std::fputs(kUsage, stderr);
+    std::exit(1);
+}
+
+long long ParseInt(const std::string &flag, const char *s, long long lo, long long hi) {
+    char *end = nullptr;
+    errno = 0;
+    long long v = std::strtoll(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi)
+        Usage(flag + ": expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+              "], got \"" + s + "\"");
+    return v;
+}
+
+double ParseFloat(const std::string &flag, const char *s) {
+    char *end = nullptr;
+    double v = std::strtod(s, &end);
+    if (end == s || *end || !std::isfinite(v)) Usage(flag + ": expected a number, got \"" + s + "\"");
+    return v;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    RenderOptions opts;
+    std::vector<std::string> files;
+
+    // Flags take "--flag value" or "--flag=value".
+    for (int i = 1; i < argc; ++i) {
+        std::string arg = argv[i];
+        if (arg.size() < 2 || arg.compare(0, 2, "--") != 0 || arg == "--") {
+            if (arg == "-h") Usage("");
+            if (!arg.empty() && arg[0] == '-' && arg != "-") Usage("unknown option \"" + arg + "\"");
+            files.push_back(arg);
+            continue;
+        }
+        std::string flag = arg, inlineValue;
+        bool hasInline = false;
+        if (size_t eq = arg.find('='); eq != std::string::npos) {
+            flag = arg.substr(0, eq);
+            inlineValue = arg.substr(eq + 1);
+            hasInline = true;
+        }
+        auto value = [&]() -> const char * {
+            if (hasInline) return inlineValue.c_str();
+            if (i + 1 >= argc) Usage(flag + " needs a value");
+            return argv[++i];
+        };
+        if (flag == "--help") {
+            std::fputs(kUsage, stdout);
+            return 0;
+        } else if (flag == "--quiet") {
+            opts.quiet = true;
+        } else if (flag == "--spp") {
+            opts.spp = int(ParseInt(flag, value(), 1, 1 << 30));
+        } else if (flag == "--seed") {
+            opts.seed = uint64_t(ParseInt(flag, value(), 0, (1LL << 62)));
+        } else if (flag == "--maxdepth") {
+            opts.maxDepth = int(ParseInt(flag, value(), 0, 100000));
+        } else if (flag == "--nthreads") {
+            opts.nThreads = int(ParseInt(flag, value(), 0, 4096));
+        } else if (flag == "--outfile") {
+            opts.outfile = value();
+        } else if (flag == "--resolution") {
+            std::string v = value();
+            size_t x = v.find_first_of("xX");
+            if (x == std::string::npos) Usage("--resolution: expected WxH, got \"" + v + "\"");
+            opts.resolution.x = int(ParseInt(flag, v.substr(0, x).c_str(), 1, 1 << 16));
+            opts.resolution.y = int(ParseInt(flag, v.substr(x + 1).c_str(), 1, 1 << 16));
+        } else if (flag == "--resolution-scale") {
+            opts.resolutionScale = Float(ParseFloat(flag, value()));
+            if (!(opts.resolutionScale > 0)) Usage("--resolution-scale must be positive");
+        } else if (flag == "--wavelength-sampling") {
+            opts.wavelengthSampling = value();
+            if (opts.wavelengthSampling != "visible" && opts.wavelengthSampling != "uniform")
+                Usage("--wavelength-sampling: expected visible or uniform, got \"" + opts.wavelengthSampling + "\"");
+        } else if (flag == "--wavelength-range") {
+            if (hasInline) Usage("--wavelength-range takes two values: --wavelength-range LO HI");
+            if (i + 2 >= argc) Usage("--wavelength-range needs two values");
+            opts.lambdaMin = Float(ParseFloat(flag, argv[++i]));
+            opts.lambdaMax = Float(ParseFloat(flag, argv[++i]));
+            if (!(opts.lambdaMin >= 360 && opts.lambdaMax <= 830 && opts.lambdaMin < opts.lambdaMax))
+                Usage("--wavelength-range: need 360 <= LO < HI <= 830");
+        } else {
+            Usage("unknown option \"" + flag + "\"");
+        }
+    }
+
+    try {
+        std::unique_ptr<Scene> scene = LoadScene(files, opts);
+        std::string outfile = opts.outfile.empty() ? scene->film->Settings().filename : opts.outfile;
+        // Fail before rendering, not after, when the image cannot be written there.
+        std::filesystem::path dir = std::filesystem::path(outfile).parent_path();
+        if (!dir.empty() && !std::filesystem::is_directory(dir))
+            throw PbrtError("\"" + outfile + "\": the output directory does not exist");
+        const FilmSettings &fs = scene->film->Settings();
+        if (!opts.quiet)
+            std::fprintf(stderr, "pbrt: %dx%d pixels, %d spp (%s), maxdepth %d, wavelengths: %s\n",
+                         fs.pixelBounds.Width(), fs.pixelBounds.Height(),
+                         scene->sampler.SamplesPerPixel(), scene->sampler.Description().c_str(),
+                         scene->integrator.maxDepth, scene->wavelengths.Description().c_str());
+        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet);
+        scene->film->WriteImage(outfile);
+        if (!opts.quiet)
+            std::fprintf(stderr,
+                         "pbrt: wrote %s; rendered in %.2f s: %llu paths, %.3f M paths/s, "
+                         "%.3f M paths per CPU-second\n",
+                         outfile.c_str(), stats.wallSeconds, (unsigned long long)stats.paths,
+                         stats.paths / std::max(stats.wallSeconds, 1e-9) * 1e-6,
+                         stats.paths / std::max(stats.cpuSeconds, 1e-9) * 1e-6);
+    } catch (const PbrtError &e) {
+        std::fprintf(stderr, "pbrt: %s\n", e.what());
+        return 1;
+    } catch (const std::bad_alloc &) {
+        std::fprintf(stderr, "pbrt: out of memory\n");
+        return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,81 @@
+// The "rgb" film: accumulates filter-weighted RGB (from the cie1931 FilmSensor, in the output
+// colour space) per pixel and writes linear RGB, EXR 32-bit float or PNG by file extension.
+//
+// Parameters (pbrt-v4): xresolution (1280), yresolution (720), filename ("pbrt.exr"),
+// cropwindow [x0 x1 y0 y1] in [0,1], pixelbounds [x0 x1 y0 y1], iso (100), whitebalance
+// (0 only), sensor ("cie1931" only), maxcomponentvalue (infinite; applied to the output
+// RGB), savefp16 (ignored: EXR is always 32-bit float), diagonal (only for realistic cameras).
+// The colour space is the one in effect at the Film directive (ColorSpace directive).
+// "gbuffer" and "spectral" films are rendered as "rgb" with a warning.
+#pragma once
+
+#include <pbrt/color.h>
+#include <pbrt/image.h>
+#include <pbrt/sensor.h>
+#include <pbrt/vecmath.h>
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pbrt {
+
+class ParameterDictionary;
+
+struct FilmSettings {
+    Point2i fullResolution{1280, 720};
+    Bounds2i pixelBounds{{0, 0}, {1280, 720}};
+    std::string filename = "pbrt.exr";
+    Float iso = 100;
+    Float maxComponentValue = std::numeric_limits<Float>::infinity();
+    const RGBColorSpace *colorSpace = nullptr;
+
+    // From a Film directive. resolutionOverride (if x > 0) replaces the resolution, and
+    // resolutionScale scales it; the crop window stays the same fraction of the image.
+    static FilmSettings Create(const std::string &type, const ParameterDictionary &params,
+                               const RGBColorSpace *colorSpace, Point2i resolutionOverride,
+                               Float resolutionScale, const FileLoc &loc);
+};
+
+class RGBFilm {
+  public:
+    RGBFilm(const FilmSettings &settings, Float exposureTime);
+
+    const FilmSettings &Settings() const { return settings; }
+    Bounds2i PixelBounds() const { return settings.pixelBounds; }
+    Point2i FullResolution() const { return settings.fullResolution; }
+    const FilmSensor &Sensor() const { return sensor; }
+
+    // The RGB of one path's radiance (clamped per maxcomponentvalue; non-finite values
+    // become 0 and are counted).
+    RGB ToRGB(const SampledSpectrum &L, const SampledWavelengths &lambda) const;
+
+    // Adds a weighted RGB sample to a pixel; pixels are independent (filter importance
+    // sampling), so threads that own different pixels never touch the same entry.
+    void AddSample(Point2i pPixel, const RGB &rgb, Float weight) {
+        Pixel &px = pixels[Offset(pPixel)];
+        px.rgb[0] += double(weight) * rgb.r;
+        px.rgb[1] += double(weight) * rgb.g;
+        px.rgb[2] += double(weight) * rgb.b;
+        px.weight += weight;
+    }
+    // The final image (width x height of the pixel bounds, 3 channels).
+    Image GetImage() const;
+    void WriteImage(const std::string &filename) const;
+
+  private:
+    size_t Offset(Point2i p) const {
+        return size_t(p.y - settings.pixelBounds.pMin.y) * settings.pixelBounds.Width() +
+               size_t(p.x - settings.pixelBounds.pMin.x);
+    }
+    struct Pixel {
+        double rgb[3] = {0, 0, 0};
+        double weight = 0;
+    };
+    FilmSettings settings;
+    FilmSensor sensor;
+    std::vector<Pixel> pixels;
+};
+
+}  // namespace pbrt

@@ -1,0 +1,136 @@
+#include <pbrt/integrator.h>
+
+#include <pbrt/materials.h>
+#include <pbrt/paramdict.h>
+#include <pbrt/sampler.h>
+#include <pbrt/scene.h>
+
+namespace pbrt {
+
+IntegratorSettings IntegratorSettings::Create(const std::string &name,
+                                              const ParameterDictionary &params,
+                                              const FileLoc &loc) {
+    IntegratorSettings s;
+    s.name = name;
+    s.maxDepth = params.GetOneInt("maxdepth", 5);
+    if (s.maxDepth < 0) throw PbrtError(params.Loc("maxdepth"), "\"maxdepth\" must be >= 0");
+    if (params.GetOneBool("regularize", false))
+        throw PbrtError(params.Loc("regularize"), "\"regularize\" true is not supported");
+    // Any light sampler gives the same expectation; ours picks lights by power.
+    params.GetOneString("lightsampler", "bvh");
+    if (name != "path") {
+        Warning(loc, "Integrator \"" + name + "\" is not supported; rendering with \"path\" "
+                     "(same image in expectation for scenes without participating media)");
+        // Parameters of the substituted integrator have no meaning for "path".
+        for (const ParsedParameter &p : params.Parameters()) p.lookedUp = true;
+    }
+    return s;
+}
+
+namespace {
+
+// Direct lighting at a surface point: one light chosen by power, one sample on it, weighted
+// by MIS against BSDF sampling.
+SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const BSDF &bsdf,
+                         const SampledWavelengths &lambda, Sampler &sampler) {
+    Float uLight = sampler.Get1D();
+    Point2f u = sampler.Get2D();
+    Float pmf;
+    int li = scene.lightSampler.Sample(uLight, &pmf);
+    if (li < 0 || pmf == 0) return SampledSpectrum(0);
+    const Light &light = scene.lights[li];
+    LightSampleContext ctx{si.p, si.n, si.pError};
+    std::optional<LightLiSample> ls = light.SampleLi(ctx, u, lambda);
+    if (!ls || !ls->L.IsNonZero() || ls->pdf == 0) return SampledSpectrum(0);
+
+    SampledSpectrum f = bsdf.f(si.wo, ls->wi) * AbsDot(ls->wi, si.ns);
+    if (!f.IsNonZero()) return SampledSpectrum(0);
+    if (!scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)))
+        return SampledSpectrum(0);
+
+    Float p_l = pmf * ls->pdf;
+    if (light.IsDelta()) return ls->L * f / p_l;
+    Float p_b = bsdf.PDF(si.wo, ls->wi);
+    return ls->L * f * (PowerHeuristic(1, p_l, 1, p_b) / p_l);
+}
+
+}  // namespace
+
+SampledSpectrum PathLi(const Scene &scene, Ray ray, const SampledWavelengths &lambda,
+                       Sampler &sampler, int maxDepth) {
+    SampledSpectrum L(0), beta(1);
+    int depth = 0, skips = 0;
+    Float p_b = 1, etaScale = 1;
+    bool specularBounce = false;
+    LightSampleContext prevCtx;
+    SurfaceInteraction si;
+
+    while (true) {
+        if (!scene.accel->Intersect(ray, &si)) {
+            // Escaped: radiance of the infinite lights, MIS-weighted against NEE.
+            for (int li : scene.infiniteLights) {
+                const Light &light = scene.lights[li];
+                SampledSpectrum Le = light.Le(lambda);
+                if (!Le.IsNonZero()) continue;
+                if (depth == 0 || specularBounce) {
+                    L += beta * Le;
+                } else {
+                    Float p_l = scene.lightSampler.PMF(li) * light.PDF_Li(prevCtx, ray.d, si);
+                    L += beta * Le * PowerHeuristic(1, p_b, 1, p_l);
+                }
+            }
+            break;
+        }
+
+        // Emission from an area light that was hit.
+        if (si.areaLight >= 0) {
+            const Light &light = scene.lights[si.areaLight];
+            SampledSpectrum Le = light.L(si.n, si.wo, lambda);
+            if (Le.IsNonZero()) {
+                if (depth == 0 || specularBounce) {
+                    L += beta * Le;
+                } else {
+                    Float p_l = scene.lightSampler.PMF(si.areaLight) *
+                                light.PDF_Li(prevCtx, Normalize(ray.d), si);
+                    L += beta * Le * PowerHeuristic(1, p_b, 1, p_l);
+                }
+            }
+        }
+
+        // "interface" surfaces: continue through without counting a bounce.
+        std::optional<BSDF> bsdf;
+        if (si.material >= 0) bsdf = GetBSDF(scene.materials[si.material], si, lambda);
+        if (!bsdf) {
+            if (++skips > 256) break;
+            ray = si.SpawnRay(ray.d);
+            continue;
+        }
+        if (depth++ == maxDepth) break;
+        if (bsdf->IsBlack()) break;
+
+        if (bsdf->IsNonSpecular()) L += beta * SampleLd(scene, si, *bsdf, lambda, sampler);
+
+        // Continue the path in a BSDF-sampled direction.
+        Float uc = sampler.Get1D();
+        std::optional<BSDFSample> bs = bsdf->Sample_f(si.wo, uc, sampler.Get2D());
+        if (!bs) break;
+        beta *= bs->f * (AbsDot(bs->wi, si.ns) / bs->pdf);
+        p_b = bs->pdf;
+        specularBounce = bs->specular;
+        if (bs->transmission) etaScale *= Sqr(bs->eta);
+        prevCtx = LightSampleContext{si.p, si.n, si.pError};
+        ray = si.SpawnRay(bs->wi);
+
+        // Russian roulette once the path throughput is small.
+        SampledSpectrum rrBeta = beta * etaScale;
+        Float maxBeta = rrBeta.MaxComponentValue();
+        if (maxBeta < 1 && depth > 1) {
+            Float q = std::max<Float>(0, 1 - maxBeta);
+            if (sampler.Get1D() < q) break;
+            beta /= 1 - q;
+        }
+    }
+    return L;
+}
+
+}  // namespace pbrt

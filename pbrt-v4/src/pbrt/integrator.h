@@ -1,0 +1,33 @@
+// The "path" integrator (pbrt-v4's PathIntegrator): unidirectional path tracing with
+// next-event estimation, multiple importance sampling (power heuristic) between light and
+// BSDF sampling, Russian roulette after the second bounce, and a maximum depth.
+//
+// Depth counts scattering events: maxdepth 0 shows emitters seen directly, 1 adds direct
+// lighting, and so on. Other integrator names ("volpath", "bdpt", "mlt", "sppm", ...)
+// render with "path" after one warning; "regularize" is not supported.
+#pragma once
+
+#include <pbrt/ray.h>
+#include <pbrt/spectrum.h>
+
+#include <string>
+
+namespace pbrt {
+
+class ParameterDictionary;
+class Sampler;
+struct Scene;
+
+struct IntegratorSettings {
+    std::string name = "path";
+    int maxDepth = 5;
+
+    static IntegratorSettings Create(const std::string &name, const ParameterDictionary &params,
+                                     const FileLoc &loc);
+};
+
+// Radiance arriving along `ray` at the camera, at the wavelengths lambda.
+SampledSpectrum PathLi(const Scene &scene, Ray ray, const SampledWavelengths &lambda,
+                       Sampler &sampler, int maxDepth);
+
+}  // namespace pbrt

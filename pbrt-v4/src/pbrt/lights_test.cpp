@@ -1,0 +1,133 @@
+// Lights against closed forms: the radiance of a diffuse floor (albedo 0.5) straight below
+// each light, seen by a tiny orthographic camera, is albedo / pi * E with E the irradiance
+// the light's definition implies (pbrt-v4's 1-nit normalization times "scale", or the
+// "power" / "illuminance" it is given).
+#include <pbrt/lights.h>
+
+#include <pbrt/rng.h>
+#include <pbrt/test_util.h>
+
+#include <gtest/gtest.h>
+
+using namespace pbrt;
+using namespace pbrt::testing_util;
+
+namespace {
+
+const double kAlbedo = 0.5;
+
+// Luminance of the floor point (0, 0, 0) lit by `lights` (direct lighting only).
+Stat FloorLuminance(const std::string &lights, int spp = 256) {
+    std::string scene = R"(
+LookAt 0 0 0.5  0 0 0  0 1 0
+Camera "orthographic" "float screenwindow" [-0.001 0.001 -0.001 0.001]
+Film "rgb" "integer xresolution" [4] "integer yresolution" [4]
+Sampler "independent" "integer pixelsamples" [)" + std::to_string(spp) + R"(]
+Integrator "path" "integer maxdepth" [1]
+WorldBegin
+Material "diffuse" "spectrum reflectance" [300 0.5 900 0.5]
+Shape "trianglemesh" "point3 P" [-20 -20 0  20 -20 0  20 20 0  -20 20 0] "integer indices" [0 1 2 0 2 3]
+)" + lights;
+    return XYZStat(RenderString(scene), 1);
+}
+
+void ExpectLuminance(const std::string &lights, double expect, const char *what) {
+    Stat st = FloorLuminance(lights);
+    EXPECT_LT(std::abs(st.mean - expect), 5 * st.stderror + 1e-5 * expect)
+        << what << ": " << st.mean << " vs " << expect << " (stderr " << st.stderror << ")";
+    EXPECT_LT(std::abs(st.mean - expect), 0.01 * expect) << what << ": " << st.mean << " vs " << expect;
+}
+
+}  // namespace
+
+TEST(Lights, PointLight) {
+    // I has luminous intensity "scale" (1-nit normalization): E = I / h^2.
+    ExpectLuminance(R"(LightSource "point" "blackbody I" [3000] "float scale" [2] "point3 from" [0 0 1.5])",
+                    kAlbedo / Pi * 2 / (1.5 * 1.5), "point light");
+    // "power" is the luminous power: I = power / (4 pi).
+    ExpectLuminance(R"(LightSource "point" "float power" [10] "point3 from" [0 0 2])",
+                    kAlbedo / Pi * 10 / (4 * Pi) / 4, "point light with power");
+    // The CTM places the light: Translate moves "from". An RGB intensity is normalized by
+    // its illuminant only (pbrt-v4), so it keeps the RGB's luminance relative to white.
+    double lum = RGBColorSpace::sRGB->Luminance(RGB(0.2f, 0.5f, 0.9f));
+    ExpectLuminance(R"(Translate 0 0 1  LightSource "point" "rgb I" [0.2 0.5 0.9] "point3 from" [0 0 1])",
+                    kAlbedo / Pi / 4 * lum, "translated RGB point light");
+}
+
+TEST(Lights, SpotLight) {
+    ExpectLuminance(R"(LightSource "spot" "float scale" [3] "point3 from" [0 0 1] "point3 to" [0 0 0] "float coneangle" [20])",
+                    kAlbedo / Pi * 3, "spot light on axis");
+    Stat off = FloorLuminance(R"(LightSource "spot" "point3 from" [0 0 1] "point3 to" [1 0 1] "float coneangle" [30])", 16);
+    EXPECT_EQ(off.mean, 0) << "a point 90 degrees off the spot's axis is dark";
+    // In the falloff zone: smoothstep of cos(theta) between the cone and cone - delta.
+    double theta = Radians(27), ct = std::cos(theta);
+    double c0 = std::cos(Radians(30)), c1 = std::cos(Radians(25));
+    double t = (ct - c0) / (c1 - c0), falloff = t * t * (3 - 2 * t);
+    ExpectLuminance(R"(LightSource "spot" "point3 from" [0 0 1] "point3 to" [)" + std::to_string(std::tan(theta)) +
+                        R"( 0 0] "float coneangle" [30] "float conedelta" [5])",
+                    kAlbedo / Pi * falloff, "spot light falloff");
+}
+
+TEST(Lights, DistantLight) {
+    // Radiance "L" normalized to 1 nit times scale arrives as irradiance scale * cos(theta).
+    ExpectLuminance(R"(LightSource "distant" "point3 from" [0 1 1] "point3 to" [0 0 0] "float scale" [3])",
+                    kAlbedo / Pi * 3 / std::sqrt(2.0), "distant light at 45 degrees");
+    ExpectLuminance(R"(LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0] "float illuminance" [7])",
+                    kAlbedo / Pi * 7, "distant light with illuminance");
+}
+
+TEST(Lights, UniformInfiniteLight) {
+    // A constant sky of luminance L gives an open floor E = pi L; "illuminance" sets E.
+    ExpectLuminance(R"(LightSource "infinite" "float scale" [2])", kAlbedo * 2, "sky");
+    ExpectLuminance(R"(LightSource "infinite" "spectrum L" [400 1 700 0.2] "float illuminance" [5])",
+                    kAlbedo / Pi * 5, "sky with illuminance");
+}
+
+TEST(Lights, SphereAreaLight) {
+    // A sphere of radius R at distance d, luminance L: E = pi L (R / d)^2. Exercises cone
+    // sampling and the MIS weights of BSDF-sampled hits on the sphere.
+    ExpectLuminance(R"(AttributeBegin AreaLightSource "diffuse" "float scale" [4] Translate 0 0 3
+                       Shape "sphere" "float radius" [1] AttributeEnd)",
+                    kAlbedo * 4 / 9, "sphere light");
+    // Scaled sphere (similarity transform): the same sphere.
+    ExpectLuminance(R"(AttributeBegin AreaLightSource "diffuse" "float scale" [4] Translate 0 0 3 Scale 2 2 2
+                       Shape "sphere" "float radius" [0.5] AttributeEnd)",
+                    kAlbedo * 4 / 9, "scaled sphere light");
+    // A reversed sphere emits inwards: nothing reaches the floor.
+    EXPECT_EQ(FloorLuminance(R"(AttributeBegin ReverseOrientation AreaLightSource "diffuse" Translate 0 0 3
+                                Shape "sphere" AttributeEnd)", 16).mean, 0);
+}
+
+TEST(Lights, TwoSidedQuadLight) {
+    // A large two-sided quad far above acts like a sky patch: E = pi L F; a quad whose
+    // normal points up lights the floor only when "twosided" is set.
+    std::string quad = R"(Shape "trianglemesh" "point3 P" [-1 -1 1  1 -1 1  1 1 1  -1 1 1] "integer indices" [0 1 2 0 2 3])";
+    EXPECT_EQ(FloorLuminance("AttributeBegin AreaLightSource \"diffuse\"\n" + quad + " AttributeEnd", 16).mean, 0);
+    // Form factor of a 2 x 2 square at height 1 centred above the point: 4 corner rectangles.
+    double A = 1, F = 4 * (A / std::sqrt(1 + A * A) * std::atan(A / std::sqrt(1 + A * A))) * 2 / (2 * Pi);
+    ExpectLuminance("AttributeBegin AreaLightSource \"diffuse\" \"bool twosided\" true \"float scale\" [2]\n" + quad +
+                        " AttributeEnd",
+                    kAlbedo * 2 * F, "two-sided quad");
+    // ReverseOrientation turns it down; a mirroring transform (which reverses the winding)
+    // does not change the side (pbrt flips the normal when the transform swaps handedness).
+    ExpectLuminance("AttributeBegin Scale -1 1 1 ReverseOrientation AreaLightSource \"diffuse\" \"float scale\" [2]\n" +
+                        quad + " AttributeEnd",
+                    kAlbedo * 2 * F, "reversed, mirrored quad");
+    EXPECT_EQ(FloorLuminance("AttributeBegin Scale -1 1 1 AreaLightSource \"diffuse\"\n" + quad + " AttributeEnd", 16).mean, 0);
+}
+
+TEST(Lights, IndexedSpectrumMatchesPiecewiseLinear) {
+    RNG rng(3);
+    std::vector<Float> v;
+    Float l = 379.5f;
+    for (int i = 0; i < 300; ++i) {
+        v.push_back(l);
+        v.push_back(rng.UniformFloat() < 0.3f ? 0 : rng.UniformFloat());
+        l += 0.3f + 2 * rng.UniformFloat();
+    }
+    auto pl = PiecewiseLinearSpectrum::FromInterleaved(v, false);
+    IndexedPiecewiseLinearSpectrum fast(*pl);
+    for (Float x = 350; x < 850; x += 0.0137f) ASSERT_EQ(fast(x), (*pl)(x)) << "lambda " << x;
+    for (size_t i = 0; i < pl->Lambdas().size(); ++i)
+        ASSERT_EQ(fast(pl->Lambdas()[i]), (*pl)(pl->Lambdas()[i])) << "at node " << i;
+}

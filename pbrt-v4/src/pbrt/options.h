@@ -1,0 +1,28 @@
+// Command-line options that override or complement the scene file (one struct; cmd/pbrt.cpp
+// fills it from kebab-case flags).
+#pragma once
+
+#include <pbrt/vecmath.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace pbrt {
+
+struct RenderOptions {
+    std::optional<int> spp;               // --spp: samples per pixel (overrides "pixelsamples")
+    std::string outfile;                  // --outfile: image to write (overrides the film's)
+    int nThreads = 0;                     // --nthreads: 0 = all cores
+    std::optional<uint64_t> seed;         // --seed: overrides the scene's seeds
+    bool quiet = false;                   // --quiet: no progress bar or summary
+    // Wavelength sampling (SPEC 5): "visible" (pbrt-v4's default) or "uniform" over
+    // [lambdaMin, lambdaMax] (stratified).
+    std::string wavelengthSampling = "visible";
+    Float lambdaMin = 360, lambdaMax = 830;
+    Point2i resolution{0, 0};             // --resolution WxH (0: the film's)
+    Float resolutionScale = 1;            // --resolution-scale S: multiplies the resolution
+    std::optional<int> maxDepth;          // --maxdepth: overrides the integrator's
+};
+
+}  // namespace pbrt

@@ -1,0 +1,74 @@
+#include <pbrt/render.h>
+
+#include <pbrt/progress.h>
+#include <pbrt/scene.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <sys/resource.h>
+
+#include <memory>
+
+namespace pbrt {
+
+double ProcessCPUSeconds() {
+    rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
+RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
+    std::unique_ptr<tbb::global_control> limit;
+    if (nThreads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(nThreads));
+
+    RGBFilm &film = *scene.film;
+    const Bounds2i bounds = film.PixelBounds();
+    const int spp = scene.sampler.SamplesPerPixel();
+    const int maxDepth = scene.integrator.maxDepth;
+    constexpr int kTile = 16;
+    const int nx = (bounds.Width() + kTile - 1) / kTile, ny = (bounds.Height() + kTile - 1) / kTile;
+
+    ProgressReporter progress(int64_t(bounds.Area()) * spp, "Rendering", quiet);
+    double cpu0 = ProcessCPUSeconds();
+
+    tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 1), [&](const tbb::blocked_range<int> &range) {
+        pbrt::Sampler sampler = scene.sampler;
+        for (int tile = range.begin(); tile != range.end(); ++tile) {
+            int x0 = bounds.pMin.x + (tile % nx) * kTile, y0 = bounds.pMin.y + (tile / nx) * kTile;
+            int x1 = std::min(x0 + kTile, bounds.pMax.x), y1 = std::min(y0 + kTile, bounds.pMax.y);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    Point2i p{x, y};
+                    for (int s = 0; s < spp; ++s) {
+                        sampler.StartPixelSample(p, s);
+                        // Film position from the filter's distribution around the pixel centre.
+                        Point2f uFilter = sampler.GetPixel2D();
+                        FilterSample fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
+                                                                   : scene.filter.Sample(uFilter);
+                        Point2f pFilm(x + 0.5f + fs.p.x, y + 0.5f + fs.p.y);
+                        // Four wavelengths from one number: the seam for other samplers.
+                        Float uLambda = sampler.Get1D();
+                        SampledWavelengths lambda =
+                            scene.wavelengths.Sample(scene.disableWavelengthJitter ? 0.5f : uLambda);
+                        Point2f uLens = sampler.Get2D();
+                        Ray ray = scene.camera->GenerateRay(pFilm, uLens);
+                        SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth);
+                        film.AddSample(p, film.ToRGB(L, lambda), fs.weight);
+                    }
+                }
+            progress.Update(int64_t(x1 - x0) * (y1 - y0) * spp);
+        }
+    });
+    progress.Done();
+
+    RenderStats stats;
+    stats.wallSeconds = progress.ElapsedSeconds();
+    stats.cpuSeconds = ProcessCPUSeconds() - cpu0;
+    stats.paths = uint64_t(bounds.Area()) * uint64_t(spp);
+    return stats;
+}
+
+}  // namespace pbrt

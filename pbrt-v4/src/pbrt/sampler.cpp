@@ -1,0 +1,177 @@
+#include <pbrt/sampler.h>
+
+#include <array>
+
+namespace pbrt {
+
+namespace {
+
+uint32_t ReverseBits32(uint32_t n) {
+    n = (n << 16) | (n >> 16);
+    n = ((n & 0x00ff00ffu) << 8) | ((n & 0xff00ff00u) >> 8);
+    n = ((n & 0x0f0f0f0fu) << 4) | ((n & 0xf0f0f0f0u) >> 4);
+    n = ((n & 0x33333333u) << 2) | ((n & 0xccccccccu) >> 2);
+    n = ((n & 0x55555555u) << 1) | ((n & 0xaaaaaaaau) >> 1);
+    return n;
+}
+
+// A hash in which every bit depends only on itself and the bits below it: a random
+// permutation of each subtree of the binary digit tree when applied to reversed bits
+// (constants of Burley 2020, after Laine and Karras 2011).
+uint32_t LaineKarrasPermutation(uint32_t x, uint32_t seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+// Direction numbers of the second Sobol' dimension (primitive polynomial x + 1): the
+// generator matrix is the upper-triangular Pascal matrix mod 2, v_k = v_{k-1} ^ (v_{k-1} >> 1).
+// The product with an index is linear over GF(2), so it is tabulated per index byte.
+std::array<std::array<uint32_t, 256>, 4> MakeSobolDim1Tables() {
+    std::array<uint32_t, 32> v{};
+    v[0] = 1u << 31;
+    for (int k = 1; k < 32; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+    std::array<std::array<uint32_t, 256>, 4> t{};
+    for (int byte = 0; byte < 4; ++byte)
+        for (int b = 0; b < 256; ++b) {
+            uint32_t r = 0;
+            for (int k = 0; k < 8; ++k)
+                if (b & (1 << k)) r ^= v[8 * byte + k];
+            t[byte][b] = r;
+        }
+    return t;
+}
+const std::array<std::array<uint32_t, 256>, 4> kSobolDim1 = MakeSobolDim1Tables();
+
+Float ToUnitFloat(uint32_t v) { return std::min<Float>(v * 0x1p-32f, OneMinusEpsilon); }
+
+}  // namespace
+
+uint32_t PermutationElement(uint32_t i, uint32_t l, uint32_t p) {
+    uint32_t w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    // Cycle-walk a hash-based bijection on [0, w] until it lands inside [0, l).
+    do {
+        i ^= p;
+        i *= 0xe170893du;
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i *= 0x0929eb3fu;
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i *= 1 | p >> 27;
+        i *= 0x6935fa69u;
+        i ^= (i & w) >> 11;
+        i *= 0x74dcb303u;
+        i ^= (i & w) >> 2;
+        i *= 0x9e501cc3u;
+        i ^= (i & w) >> 2;
+        i *= 0xc860a3dfu;
+        i &= w;
+        i ^= i >> 5;
+    } while (i >= l);
+    return (i + p) % l;
+}
+
+uint32_t OwenScramble(uint32_t v, uint32_t seed) {
+    return ReverseBits32(LaineKarrasPermutation(ReverseBits32(v), seed));
+}
+
+uint32_t SobolDim0(uint32_t index) { return ReverseBits32(index); }
+
+uint32_t SobolDim1(uint32_t index) {
+    return kSobolDim1[0][index & 0xff] ^ kSobolDim1[1][(index >> 8) & 0xff] ^
+           kSobolDim1[2][(index >> 16) & 0xff] ^ kSobolDim1[3][index >> 24];
+}
+
+Sampler::Sampler(SamplerType type, int samplesPerPixel, uint64_t seed, int xSamples,
+                 int ySamples, bool jitter)
+    : type(type), spp(samplesPerPixel), xSamples(xSamples), ySamples(ySamples),
+      jitter(jitter), seed(seed) {
+    if (spp < 1) throw PbrtError("the number of samples per pixel must be at least 1");
+    if (type == SamplerType::Stratified && xSamples * ySamples != spp)
+        throw PbrtError("stratified sampler: xsamples * ysamples must equal the pixel samples");
+}
+
+std::string Sampler::Description() const {
+    switch (type) {
+    case SamplerType::Independent: return "independent";
+    case SamplerType::Stratified:
+        return "stratified " + std::to_string(xSamples) + "x" + std::to_string(ySamples);
+    case SamplerType::Sobol: return "owen-scrambled sobol";
+    }
+    return "?";
+}
+
+void Sampler::StartPixelSample(Point2i p, int index, int dim) {
+    pixel = p;
+    pixelHash = HashInts({uint64_t(p.x), uint64_t(p.y), seed});
+    sampleIndex = index;
+    dimension = dim;
+    if (type == SamplerType::Independent || (type == SamplerType::Stratified && jitter))
+    {
+        // One PCG32 stream per pixel; sample i starts 2^20 draws after sample i - 1.
+        rng.SetSequence(pixelHash, 0);
+        rng.Advance(int64_t(index) << 20);
+    }
+}
+
+Float Sampler::Get1D() {
+    int dim = dimension++;
+    switch (type) {
+    case SamplerType::Independent: return rng.UniformFloat();
+    case SamplerType::Stratified: {
+        uint32_t s = PermutationElement(uint32_t(sampleIndex % spp), uint32_t(spp),
+                                        uint32_t(DimensionHash(dim)));
+        Float delta = jitter ? rng.UniformFloat() : 0.5f;
+        return std::min<Float>((s + delta) / spp, OneMinusEpsilon);
+    }
+    case SamplerType::Sobol: {
+        uint64_t h = DimensionHash(dim);
+        uint32_t index = OwenScramble(uint32_t(sampleIndex), uint32_t(h));
+        return ToUnitFloat(OwenScramble(SobolDim0(index), uint32_t(h >> 32)));
+    }
+    }
+    return 0;
+}
+
+Point2f Sampler::Get2D() {
+    int dim = dimension;
+    dimension += 2;
+    switch (type) {
+    case SamplerType::Independent: {
+        Float a = rng.UniformFloat();
+        return {a, rng.UniformFloat()};
+    }
+    case SamplerType::Stratified: {
+        uint32_t s = PermutationElement(uint32_t(sampleIndex % spp), uint32_t(spp),
+                                        uint32_t(DimensionHash(dim)));
+        int x = int(s) % xSamples, y = int(s) / xSamples;
+        Float dx = jitter ? rng.UniformFloat() : 0.5f;
+        Float dy = jitter ? rng.UniformFloat() : 0.5f;
+        return {std::min<Float>((x + dx) / xSamples, OneMinusEpsilon),
+                std::min<Float>((y + dy) / ySamples, OneMinusEpsilon)};
+    }
+    case SamplerType::Sobol: {
+        // Both coordinates share one shuffled index so the pair stays a (0,2)-sequence.
+        uint64_t h = DimensionHash(dim);
+        uint64_t h2 = MixBits(h);
+        uint32_t index = OwenScramble(uint32_t(sampleIndex), uint32_t(h));
+        return {ToUnitFloat(OwenScramble(SobolDim0(index), uint32_t(h >> 32))),
+                ToUnitFloat(OwenScramble(SobolDim1(index), uint32_t(h2)))};
+    }
+    }
+    return {};
+}
+
+Point2f Sampler::GetPixel2D() { return Get2D(); }
+
+}  // namespace pbrt

@@ -1,0 +1,115 @@
+// Pixel samplers: stratification properties, determinism and uniformity.
+#include <pbrt/sampler.h>
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+using namespace pbrt;
+
+TEST(Sampler, PermutationIsABijection) {
+    for (uint32_t n : {1u, 2u, 7u, 16u, 100u, 1000u}) {
+        for (uint32_t seed : {0u, 1u, 0xdeadbeefu}) {
+            std::set<uint32_t> seen;
+            for (uint32_t i = 0; i < n; ++i) {
+                uint32_t v = PermutationElement(i, n, seed);
+                EXPECT_LT(v, n);
+                seen.insert(v);
+            }
+            EXPECT_EQ(seen.size(), n) << "n=" << n << " seed=" << seed;
+        }
+    }
+}
+
+TEST(Sampler, SobolFirstDimensionsAreNets) {
+    // 2^m consecutive points of the first two Sobol' dimensions form a (0, m, 2)-net: every
+    // elementary interval of area 2^-m holds exactly one point, also after Owen scrambling.
+    const int m = 6, n = 1 << m;
+    for (uint32_t seed : {0u, 12345u}) {
+        for (int k = 0; k <= m; ++k) {
+            std::set<std::pair<uint32_t, uint32_t>> cells;
+            for (uint32_t i = 0; i < uint32_t(n); ++i) {
+                uint32_t x = seed ? OwenScramble(SobolDim0(i), seed) : SobolDim0(i);
+                uint32_t y = seed ? OwenScramble(SobolDim1(i), seed * 7 + 1) : SobolDim1(i);
+                uint32_t cx = k ? x >> (32 - k) : 0, cy = (m - k) ? y >> (32 - (m - k)) : 0;
+                cells.insert({cx, cy});
+            }
+            EXPECT_EQ(int(cells.size()), n) << "elementary intervals 2^-" << k << " x 2^-" << (m - k);
+        }
+    }
+}
+
+namespace {
+// Draws the first few dimensions of every sample of one pixel.
+std::vector<std::vector<Float>> Draw(Sampler s, Point2i p, int dims) {
+    std::vector<std::vector<Float>> out;
+    for (int i = 0; i < s.SamplesPerPixel(); ++i) {
+        s.StartPixelSample(p, i);
+        std::vector<Float> v;
+        for (int d = 0; d < dims; ++d) v.push_back(s.Get1D());
+        out.push_back(v);
+    }
+    return out;
+}
+}  // namespace
+
+TEST(Sampler, StratifiedAndSobolStratifyEveryDimension) {
+    // With n samples per pixel, each 1D dimension has one sample in each of the n strata.
+    for (Sampler s : {Sampler(SamplerType::Stratified, 16, 3, 4, 4), Sampler(SamplerType::Sobol, 16, 3)}) {
+        auto v = Draw(s, {5, 9}, 12);
+        for (int d = 0; d < 12; ++d) {
+            std::set<int> strata;
+            for (auto &sample : v) {
+                ASSERT_GE(sample[d], 0);
+                ASSERT_LT(sample[d], 1);
+                strata.insert(int(sample[d] * 16));
+            }
+            EXPECT_EQ(strata.size(), 16u) << s.Description() << " dimension " << d;
+        }
+    }
+}
+
+TEST(Sampler, Stratified2DUsesTheGrid) {
+    Sampler s(SamplerType::Stratified, 12, 1, 4, 3);
+    std::set<std::pair<int, int>> cells;
+    for (int i = 0; i < 12; ++i) {
+        s.StartPixelSample({0, 0}, i);
+        Point2f u = s.Get2D();
+        cells.insert({int(u.x * 4), int(u.y * 3)});
+    }
+    EXPECT_EQ(cells.size(), 12u);
+}
+
+TEST(Sampler, DeterministicAndPixelDependent) {
+    for (SamplerType t : {SamplerType::Independent, SamplerType::Stratified, SamplerType::Sobol}) {
+        Sampler s(t, 4, 42, 2, 2);
+        auto a = Draw(s, {3, 4}, 8), b = Draw(s, {3, 4}, 8), c = Draw(s, {4, 3}, 8);
+        EXPECT_EQ(a, b) << "same pixel, same values";
+        EXPECT_NE(a, c) << "different pixels, different values";
+        auto d = Draw(Sampler(t, 4, 43, 2, 2), {3, 4}, 8);
+        EXPECT_NE(a, d) << "different seeds, different values";
+    }
+}
+
+TEST(Sampler, UniformMeanAndVariance) {
+    // Over many pixels the values of any dimension have mean 1/2 and variance 1/12.
+    for (SamplerType t : {SamplerType::Independent, SamplerType::Stratified, SamplerType::Sobol}) {
+        Sampler s(t, 4, 0, 2, 2);
+        double sum = 0, sum2 = 0;
+        int n = 0;
+        for (int py = 0; py < 50; ++py)
+            for (int px = 0; px < 50; ++px)
+                for (int i = 0; i < 4; ++i) {
+                    s.StartPixelSample({px, py}, i);
+                    for (int d = 0; d < 5; ++d) {
+                        Float u = s.Get1D();
+                        sum += u;
+                        sum2 += u * u;
+                        ++n;
+                    }
+                }
+        double mean = sum / n, var = sum2 / n - mean * mean;
+        EXPECT_NEAR(mean, 0.5, 5 * std::sqrt(1.0 / 12 / n)) << s.Description();
+        EXPECT_NEAR(var, 1.0 / 12, 0.005) << s.Description();
+    }
+}

@@ -1,0 +1,733 @@
+#include <pbrt/scene.h>
+
+#include <pbrt/color.h>
+#include <pbrt/paramdict.h>
+#include <pbrt/parser.h>
+
+#include <cctype>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+
+namespace pbrt {
+
+bool Scene::Unoccluded(const Ray &ray) const {
+    if (!hasInterfaces) return !accel->Occluded(ray);
+    // Walk through "interface" surfaces, which have no substance.
+    Point3f target = ray(ray.tMax);
+    Ray r = ray;
+    SurfaceInteraction si;
+    for (int i = 0; i < 256; ++i) {
+        if (!accel->Intersect(r, &si)) return true;
+        if (si.material >= 0) return false;
+        Point3f o = si.OffsetRayOrigin(target - si.p);
+        r = Ray(o, target - o, 1);
+        if (Dot(r.d, ray.d) <= 0) return true;
+    }
+    return false;
+}
+
+namespace {
+
+// Parameters that cannot change the picture: reported as ignored, not as errors.
+const std::set<std::string> kHarmlessParameters = {"nsamples", "samples"};
+
+std::string ParamName(const ParsedParameter &p) { return "\"" + p.type + " " + p.name + "\""; }
+
+// Every parameter nothing looked up is an error (it may change the picture), unless it is
+// known to be harmless.
+void CheckUnused(const ParameterDictionary &dict, const std::string &what) {
+    for (const ParsedParameter *p : dict.Unused()) {
+        if (kHarmlessParameters.count(p->name))
+            Warning(p->loc, "parameter " + ParamName(*p) + " of " + what + " is ignored");
+        else
+            throw PbrtError(p->loc, "parameter " + ParamName(*p) + " of " + what +
+                                        " is unknown or not supported");
+    }
+}
+
+ParsedParameterVector Concat(ParsedParameterVector a, const ParsedParameterVector &b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+
+struct MaterialRef {
+    int index = -1;          // anonymous material (Material directive) or default
+    std::string name;        // NamedMaterial
+    FileLoc loc;
+};
+
+struct AreaLightDesc {
+    std::string name;
+    ParsedParameterVector params;
+    FileLoc loc;
+    const RGBColorSpace *colorSpace = nullptr;
+};
+
+struct GraphicsState {
+    pbrt::Transform ctm[2];
+    int activeTransformBits = 3;
+    bool reverseOrientation = false;
+    MaterialRef material;
+    std::optional<AreaLightDesc> areaLight;
+    const RGBColorSpace *colorSpace = nullptr;
+    ParsedParameterVector shapeAttributes, lightAttributes, materialAttributes, textureAttributes;
+};
+
+struct PendingInstance {
+    std::string name;
+    pbrt::Transform renderFromInstance;
+    FileLoc loc;
+};
+
+class SceneBuilder : public ParserTarget {
+  public:
+    SceneBuilder(Scene *scene, const RenderOptions &opts) : scene(scene), opts(opts) {
+        scene->accel = std::make_unique<pbrt::Accelerator>();
+        graphicsState.colorSpace = RGBColorSpace::sRGB;
+        // pbrt-v4's default material: diffuse with reflectance 0.5.
+        scene->materials.push_back(
+            DiffuseMaterial{MakeConstantSpectrumTexture(std::make_shared<ConstantSpectrum>(0.5f))});
+        graphicsState.material.index = 0;
+    }
+
+    // --- Transformations -------------------------------------------------------------------
+    template <typename F>
+    void ForActive(F f) {
+        for (int i = 0; i < 2; ++i)
+            if (graphicsState.activeTransformBits & (1 << i)) graphicsState.ctm[i] = f(graphicsState.ctm[i]);
+    }
+    void Identity(FileLoc) override { ForActive([](const pbrt::Transform &) { return pbrt::Transform(); }); }
+    void Translate(Float dx, Float dy, Float dz, FileLoc) override {
+        ForActive([&](const pbrt::Transform &t) { return t * pbrt::Translate(Vector3f(dx, dy, dz)); });
+    }
+    void Scale(Float sx, Float sy, Float sz, FileLoc loc) override {
+        pbrt::Transform s = Wrap(loc, [&] { return pbrt::Scale(sx, sy, sz); });
+        ForActive([&](const pbrt::Transform &t) { return t * s; });
+    }
+    void Rotate(Float angle, Float ax, Float ay, Float az, FileLoc loc) override {
+        pbrt::Transform r = Wrap(loc, [&] { return pbrt::Rotate(angle, Vector3f(ax, ay, az)); });
+        ForActive([&](const pbrt::Transform &t) { return t * r; });
+    }
+    void LookAt(Float ex, Float ey, Float ez, Float lx, Float ly, Float lz, Float ux, Float uy,
+                Float uz, FileLoc loc) override {
+        pbrt::Transform l = Wrap(loc, [&] {
+            return pbrt::LookAt(Point3f(ex, ey, ez), Point3f(lx, ly, lz), Vector3f(ux, uy, uz));
+        });
+        ForActive([&](const pbrt::Transform &t) { return t * l; });
+    }
+    void Transform(Float m[16], FileLoc loc) override {
+        pbrt::Transform x = Wrap(loc, [&] { return TransformFromColumnMajor(m); });
+        ForActive([&](const pbrt::Transform &) { return x; });
+    }
+    void ConcatTransform(Float m[16], FileLoc loc) override {
+        pbrt::Transform x = Wrap(loc, [&] { return TransformFromColumnMajor(m); });
+        ForActive([&](const pbrt::Transform &t) { return t * x; });
+    }
+    void CoordinateSystem(const std::string &name, FileLoc) override {
+        namedCoordinateSystems[name] = {graphicsState.ctm[0], graphicsState.ctm[1]};
+    }
+    void CoordSysTransform(const std::string &name, FileLoc loc) override {
+        auto it = namedCoordinateSystems.find(name);
+        if (it == namedCoordinateSystems.end())
+            throw PbrtError(loc, "CoordSysTransform: unknown coordinate system \"" + name + "\"");
+        graphicsState.ctm[0] = it->second.first;
+        graphicsState.ctm[1] = it->second.second;
+    }
+    void ActiveTransformAll(FileLoc) override { graphicsState.activeTransformBits = 3; }
+    void ActiveTransformEndTime(FileLoc) override { graphicsState.activeTransformBits = 2; }
+    void ActiveTransformStartTime(FileLoc) override { graphicsState.activeTransformBits = 1; }
+    void TransformTimes(Float, Float, FileLoc) override {}
+
+    // --- Scene-wide options ---------------------------------------------------------------
+    void ColorSpace(const std::string &name, FileLoc loc) override {
+        const RGBColorSpace *cs = RGBColorSpace::GetNamed(name);
+        if (!cs) throw PbrtError(loc, "unknown color space \"" + name + "\"");
+        graphicsState.colorSpace = cs;
+    }
+    void Option(const std::string &name, const std::string &value, FileLoc loc) override {
+        auto boolValue = [&] {
+            if (value == "true") return true;
+            if (value == "false") return false;
+            throw PbrtError(loc, "Option \"" + name + "\": expected true or false, got \"" + value + "\"");
+        };
+        if (name == "disablepixeljitter") scene->disablePixelJitter = boolValue();
+        else if (name == "disablewavelengthjitter") scene->disableWavelengthJitter = boolValue();
+        else if (name == "seed") {
+            try {
+                optionSeed = std::stoll(value);
+            } catch (...) {
+                throw PbrtError(loc, "Option \"seed\": not an integer: \"" + value + "\"");
+            }
+        } else if (name == "rendercoordsys" || name == "disabletexturefiltering" ||
+                   name == "displacementedgescale" || name == "wavefront" || name == "gpu" ||
+                   name == "pixelstats" || name == "msereferenceimage" || name == "msereferenceout" ||
+                   name == "recordpixelstatistics") {
+            Warning(loc, "Option \"" + name + "\" has no effect here");
+        } else if (name == "forcediffuse") {
+            if (boolValue()) throw PbrtError(loc, "Option \"forcediffuse\" is not supported");
+        } else {
+            throw PbrtError(loc, "unknown Option \"" + name + "\"");
+        }
+    }
+    void PixelFilter(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireOptionsBlock("PixelFilter", loc);
+        ParameterDictionary dict(std::move(params));
+        scene->filter = Filter::Create(name, dict, loc);
+        CheckUnused(dict, "PixelFilter \"" + name + "\"");
+    }
+    void Film(const std::string &type, ParsedParameterVector params, FileLoc loc) override {
+        RequireOptionsBlock("Film", loc);
+        filmDesc = {type, std::move(params), loc, graphicsState.colorSpace};
+    }
+    void Sampler(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireOptionsBlock("Sampler", loc);
+        samplerDesc = {name, std::move(params), loc, nullptr};
+    }
+    void Accelerator(const std::string &, ParsedParameterVector, FileLoc loc) override {
+        RequireOptionsBlock("Accelerator", loc);  // Embree builds its own BVH
+    }
+    void Integrator(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireOptionsBlock("Integrator", loc);
+        integratorDesc = {name, std::move(params), loc, nullptr};
+    }
+    void Camera(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireOptionsBlock("Camera", loc);
+        CheckNoMotion(loc, "Camera");
+        cameraDesc = {name, std::move(params), loc, nullptr};
+        cameraFromWorld = graphicsState.ctm[0];
+        namedCoordinateSystems["camera"] = {Inverse(graphicsState.ctm[0]), Inverse(graphicsState.ctm[1])};
+    }
+    void MakeNamedMedium(const std::string &name, ParsedParameterVector, FileLoc loc) override {
+        throw PbrtError(loc, "MakeNamedMedium \"" + name + "\": participating media are not supported");
+    }
+    void MediumInterface(const std::string &inside, const std::string &outside, FileLoc loc) override {
+        if (!inside.empty() || !outside.empty())
+            throw PbrtError(loc, "MediumInterface: participating media are not supported");
+    }
+
+    // --- The world ------------------------------------------------------------------------------
+    void WorldBegin(FileLoc loc) override {
+        if (inWorld) throw PbrtError(loc, "WorldBegin appears twice");
+        inWorld = true;
+        graphicsState.ctm[0] = graphicsState.ctm[1] = pbrt::Transform();
+        graphicsState.activeTransformBits = 3;
+        namedCoordinateSystems["world"] = {pbrt::Transform(), pbrt::Transform()};
+    }
+    void AttributeBegin(FileLoc loc) override {
+        RequireWorld("AttributeBegin", loc);
+        pushedStates.push_back(graphicsState);
+        pushKinds.push_back({'a', loc});
+    }
+    void AttributeEnd(FileLoc loc) override {
+        RequireWorld("AttributeEnd", loc);
+        if (pushedStates.empty()) throw PbrtError(loc, "unmatched AttributeEnd");
+        if (pushKinds.back().first != 'a')
+            throw PbrtError(loc, "AttributeEnd closes the ObjectBegin at " + pushKinds.back().second.ToString());
+        graphicsState = std::move(pushedStates.back());
+        pushedStates.pop_back();
+        pushKinds.pop_back();
+    }
+    void Attribute(const std::string &target, ParsedParameterVector params, FileLoc loc) override {
+        ParsedParameterVector *dst = nullptr;
+        if (target == "shape") dst = &graphicsState.shapeAttributes;
+        else if (target == "light") dst = &graphicsState.lightAttributes;
+        else if (target == "material") dst = &graphicsState.materialAttributes;
+        else if (target == "texture") dst = &graphicsState.textureAttributes;
+        else if (target == "medium") throw PbrtError(loc, "Attribute \"medium\": media are not supported");
+        else throw PbrtError(loc, "Attribute: unknown target \"" + target + "\"");
+        dst->insert(dst->end(), params.begin(), params.end());
+    }
+    void Texture(const std::string &name, const std::string &type, const std::string &texname,
+                 ParsedParameterVector params, FileLoc loc) override;
+    void Material(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireWorld("Material", loc);
+        ParameterDictionary dict(Concat(std::move(params), graphicsState.materialAttributes));
+        scene->materials.push_back(MakeMaterial(name, dict, loc));
+        graphicsState.material = MaterialRef{int(scene->materials.size()) - 1, "", loc};
+    }
+    void MakeNamedMaterial(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireWorld("MakeNamedMaterial", loc);
+        if (namedMaterials.count(name))
+            throw PbrtError(loc, "named material \"" + name + "\" redefined");
+        ParameterDictionary dict(Concat(std::move(params), graphicsState.materialAttributes));
+        std::string type = dict.GetOneString("type", "");
+        scene->materials.push_back(MakeMaterial(type, dict, loc));
+        namedMaterials[name] = int(scene->materials.size()) - 1;
+    }
+    void NamedMaterial(const std::string &name, FileLoc loc) override {
+        RequireWorld("NamedMaterial", loc);
+        graphicsState.material = MaterialRef{-1, name, loc};
+    }
+    void LightSource(const std::string &name, ParsedParameterVector params, FileLoc loc) override;
+    void AreaLightSource(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
+        RequireWorld("AreaLightSource", loc);
+        if (name != "diffuse")
+            throw PbrtError(loc, "AreaLightSource \"" + name + "\" is not supported (only \"diffuse\")");
+        graphicsState.areaLight = AreaLightDesc{name, Concat(std::move(params), graphicsState.lightAttributes),
+                                                loc, graphicsState.colorSpace};
+    }
+    void Shape(const std::string &name, ParsedParameterVector params, FileLoc loc) override;
+    void ReverseOrientation(FileLoc loc) override {
+        RequireWorld("ReverseOrientation", loc);
+        graphicsState.reverseOrientation = !graphicsState.reverseOrientation;
+    }
+    void ObjectBegin(const std::string &name, FileLoc loc) override {
+        RequireWorld("ObjectBegin", loc);
+        if (currentObject != 0)
+            throw PbrtError(loc, "ObjectBegin \"" + name + "\" inside the definition of another object");
+        if (objects.count(name)) throw PbrtError(loc, "object \"" + name + "\" redefined");
+        pushedStates.push_back(graphicsState);
+        pushKinds.push_back({'o', loc});
+        currentObject = scene->accel->NewObject();
+        objects[name] = currentObject;
+    }
+    void ObjectEnd(FileLoc loc) override {
+        RequireWorld("ObjectEnd", loc);
+        if (currentObject == 0 || pushKinds.empty() || pushKinds.back().first != 'o')
+            throw PbrtError(loc, "ObjectEnd without a matching ObjectBegin");
+        currentObject = 0;
+        graphicsState = std::move(pushedStates.back());
+        pushedStates.pop_back();
+        pushKinds.pop_back();
+    }
+    void ObjectInstance(const std::string &name, FileLoc loc) override {
+        RequireWorld("ObjectInstance", loc);
+        if (currentObject != 0)
+            throw PbrtError(loc, "ObjectInstance inside an object definition is not supported");
+        CheckNoMotion(loc, "ObjectInstance");
+        instances.push_back({name, graphicsState.ctm[0], loc});
+    }
+    void EndOfFiles() override;
+
+  private:
+    struct Desc {
+        std::string name;
+        ParsedParameterVector params;
+        FileLoc loc;
+        const RGBColorSpace *colorSpace;
+    };
+
+    template <typename F>
+    static pbrt::Transform Wrap(const FileLoc &loc, F f) {
+        try {
+            return f();
+        } catch (const PbrtError &e) {
+            throw PbrtError(loc, e.what());
+        }
+    }
+    void RequireOptionsBlock(const char *what, const FileLoc &loc) const {
+        if (inWorld) throw PbrtError(loc, std::string(what) + " is not allowed after WorldBegin");
+    }
+    void RequireWorld(const char *what, const FileLoc &loc) const {
+        if (!inWorld) throw PbrtError(loc, std::string(what) + " is only allowed after WorldBegin");
+    }
+    void CheckNoMotion(const FileLoc &loc, const char *what) const {
+        if (graphicsState.ctm[0] != graphicsState.ctm[1])
+            throw PbrtError(loc, std::string(what) + ": motion blur (different start and end "
+                                                     "transformations) is not supported");
+    }
+
+    // Spectra and textures from parameters.
+    SpectrumHandle MakeSpectrum(const ParsedParameter &p, SpectrumType type, const RGBColorSpace &cs) const;
+    SpectrumHandle RGBSpectrum(const std::array<Float, 3> &rgb, SpectrumType type,
+                               const RGBColorSpace &cs, const FileLoc &loc) const;
+    // A spectrum-valued parameter given as rgb, spectrum or blackbody (no textures).
+    SpectrumHandle GetSpectrum(const ParameterDictionary &dict, const std::string &name,
+                               SpectrumType type, const RGBColorSpace &cs) const;
+    TextureResolver Resolver(const ParameterDictionary &dict, const RGBColorSpace &cs) const;
+    pbrt::Material MakeMaterial(const std::string &type, const ParameterDictionary &dict,
+                                const FileLoc &loc) const {
+        pbrt::Material m = CreateMaterial(type, dict, Resolver(dict, *graphicsState.colorSpace), loc);
+        CheckUnused(dict, "material \"" + type + "\"");
+        return m;
+    }
+    int ResolveMaterial(const MaterialRef &ref) const {
+        if (ref.name.empty()) return ref.index;
+        auto it = namedMaterials.find(ref.name);
+        if (it == namedMaterials.end())
+            throw PbrtError(ref.loc, "NamedMaterial \"" + ref.name + "\" is not defined");
+        return it->second;
+    }
+
+    Scene *scene;
+    RenderOptions opts;
+    GraphicsState graphicsState;
+    std::vector<GraphicsState> pushedStates;
+    std::vector<std::pair<char, FileLoc>> pushKinds;
+    std::map<std::string, std::pair<pbrt::Transform, pbrt::Transform>> namedCoordinateSystems;
+    std::map<std::string, int> namedMaterials;
+    std::map<std::string, FloatTextureHandle> floatTextures;
+    std::map<std::string, SpectrumTextureHandle> albedoTextures, unboundedTextures;
+    std::map<std::string, std::shared_ptr<const TextureImage>> textureImages;
+    std::map<std::string, int> objects;
+    std::vector<PendingInstance> instances;
+    int currentObject = 0;
+    bool inWorld = false;
+    std::optional<long long> optionSeed;
+    pbrt::Transform cameraFromWorld;
+    std::optional<Desc> filmDesc, samplerDesc, integratorDesc, cameraDesc;
+};
+
+// --- Spectra ----------------------------------------------------------------------------------
+SpectrumHandle SceneBuilder::RGBSpectrum(const std::array<Float, 3> &v, SpectrumType type,
+                                         const RGBColorSpace &cs, const FileLoc &loc) const {
+    RGB rgb(v[0], v[1], v[2]);
+    for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(rgb[c]) || rgb[c] < 0)
+            throw PbrtError(loc, "RGB value " + rgb.ToString() + " has a negative or non-finite component");
+    switch (type) {
+    case SpectrumType::Albedo:
+        if (rgb.MaxComponentValue() > 1)
+            throw PbrtError(loc, "RGB reflectance " + rgb.ToString() + " has a component > 1");
+        return std::make_shared<RGBAlbedoSpectrum>(cs, rgb);
+    case SpectrumType::Unbounded: return std::make_shared<RGBUnboundedSpectrum>(cs, rgb);
+    case SpectrumType::Illuminant: return std::make_shared<RGBIlluminantSpectrum>(cs, rgb);
+    }
+    return nullptr;
+}
+
+SpectrumHandle SceneBuilder::MakeSpectrum(const ParsedParameter &p, SpectrumType type,
+                                          const RGBColorSpace &cs) const {
+    try {
+        if (p.type == "rgb") {
+            return RGBSpectrum({Float(p.floats[0]), Float(p.floats[1]), Float(p.floats[2])}, type, cs, p.loc);
+        }
+        if (p.type == "blackbody") {
+            if (!(p.floats[0] > 0)) throw PbrtError(p.loc, "blackbody temperature must be positive");
+            return std::make_shared<BlackbodySpectrum>(Float(p.floats[0]));
+        }
+        if (p.type == "spectrum") {
+            if (!p.strings.empty()) {
+                // A named spectrum, or a .spd file relative to the scene file.
+                if (SpectrumHandle s = GetNamedSpectrum(p.strings[0])) return s;
+                return PiecewiseLinearSpectrum::ReadSPD(ResolveFilename(p.strings[0], p.loc));
+            }
+            std::vector<Float> v(p.floats.begin(), p.floats.end());
+            return PiecewiseLinearSpectrum::FromInterleaved(v, false, &p.loc);
+        }
+    } catch (const PbrtError &e) {
+        std::string msg = e.what();
+        if (msg.find(p.loc.filename) == std::string::npos || p.loc.filename.empty())
+            throw PbrtError(p.loc, "parameter " + ParamName(p) + ": " + msg);
+        throw;
+    }
+    throw PbrtError(p.loc, "parameter " + ParamName(p) + " has type \"" + p.type +
+                               "\"; expected rgb, spectrum or blackbody");
+}
+
+SpectrumHandle SceneBuilder::GetSpectrum(const ParameterDictionary &dict, const std::string &name,
+                                         SpectrumType type, const RGBColorSpace &cs) const {
+    if (auto rgb = dict.GetOneRGB(name)) return RGBSpectrum(*rgb, type, cs, dict.Loc(name));
+    const ParsedParameter *p = dict.Find(name);
+    if (!p) return nullptr;
+    return MakeSpectrum(*p, type, cs);
+}
+
+TextureResolver SceneBuilder::Resolver(const ParameterDictionary &dict, const RGBColorSpace &cs) const {
+    TextureResolver r;
+    r.spectrum = [this, &dict, &cs](const std::string &name, SpectrumHandle def,
+                                    SpectrumType type) -> SpectrumTextureHandle {
+        std::string tex = dict.GetTexture(name);
+        if (!tex.empty()) {
+            const auto &m = type == SpectrumType::Albedo ? albedoTextures : unboundedTextures;
+            auto it = m.find(tex);
+            if (it == m.end())
+                throw PbrtError(dict.Loc(name), "spectrum texture \"" + tex + "\" is not defined");
+            return it->second;
+        }
+        const ParsedParameter *p = dict.Find(name);
+        if (p && p->type == "float") {
+            // A float given for a spectrum: a constant spectrum (pbrt-v4 accepts this).
+            if (p->floats.size() != 1) throw PbrtError(p->loc, "parameter " + ParamName(*p) + " needs one value");
+            return MakeConstantSpectrumTexture(std::make_shared<ConstantSpectrum>(Float(p->floats[0])));
+        }
+        SpectrumHandle s = GetSpectrum(dict, name, type, cs);
+        if (!s) s = def;
+        return s ? MakeConstantSpectrumTexture(s) : nullptr;
+    };
+    r.floats = [this, &dict](const std::string &name, std::optional<Float> def) -> FloatTextureHandle {
+        std::string tex = dict.GetTexture(name);
+        if (!tex.empty()) {
+            auto it = floatTextures.find(tex);
+            if (it == floatTextures.end())
+                throw PbrtError(dict.Loc(name), "float texture \"" + tex + "\" is not defined");
+            return it->second;
+        }
+        const ParsedParameter *p = dict.Find(name);
+        if (p) {
+            if (p->type != "float" || p->floats.size() != 1)
+                throw PbrtError(p->loc, "parameter " + ParamName(*p) + ": expected one float or a texture");
+            return MakeConstantFloatTexture(Float(p->floats[0]));
+        }
+        return def ? MakeConstantFloatTexture(*def) : nullptr;
+    };
+    return r;
+}
+
+// --- Textures --------------------------------------------------------------------------------
+void SceneBuilder::Texture(const std::string &name, const std::string &type,
+                           const std::string &texname, ParsedParameterVector params, FileLoc loc) {
+    RequireWorld("Texture", loc);
+    if (type != "float" && type != "spectrum")
+        throw PbrtError(loc, "Texture \"" + name + "\": type must be \"float\" or \"spectrum\", not \"" + type + "\"");
+    if ((type == "float" && floatTextures.count(name)) || (type == "spectrum" && albedoTextures.count(name)))
+        throw PbrtError(loc, "texture \"" + name + "\" redefined");
+    ParameterDictionary dict(Concat(std::move(params), graphicsState.textureAttributes));
+    const RGBColorSpace &cs = *graphicsState.colorSpace;
+    TextureResolver res = Resolver(dict, cs);
+
+    // The uv mapping shared by the 2D textures.
+    auto mapping = [&] {
+        std::string m = dict.GetOneString("mapping", "uv");
+        if (m != "uv") throw PbrtError(dict.Loc("mapping"), "texture mapping \"" + m + "\" is not supported (only uv)");
+        return UVMapping{dict.GetOneFloat("uscale", 1), dict.GetOneFloat("vscale", 1),
+                         dict.GetOneFloat("udelta", 0), dict.GetOneFloat("vdelta", 0)};
+    };
+    auto dimension = [&] {
+        int d = dict.GetOneInt("dimension", 2);
+        if (d != 2 && d != 3) throw PbrtError(dict.Loc("dimension"), "checkerboard dimension must be 2 or 3");
+        return d;
+    };
+    auto unsupported = [&] {
+        throw PbrtError(loc, "texture class \"" + texname +
+                                 "\" is not supported yet (supported: constant, checkerboard, scale, mix, imagemap)");
+    };
+    // "imagemap": the image (cached per file, encoding and wrap mode) and its parameters.
+    std::shared_ptr<const TextureImage> image;
+    Float imageScale = 1;
+    bool imageInvert = false;
+    if (texname == "imagemap") {
+        std::string filename = dict.GetOneString("filename", "");
+        if (filename.empty()) throw PbrtError(loc, "imagemap texture \"" + name + "\" needs a \"filename\"");
+        std::string path = ResolveFilename(filename, dict.Loc("filename"));
+        std::string ext = path.substr(path.find_last_of('.') == std::string::npos ? path.size() : path.find_last_of('.'));
+        for (char &c : ext) c = char(std::tolower((unsigned char)c));
+        bool floatFormat = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+        std::string encoding = dict.GetOneString("encoding", floatFormat ? "linear" : "sRGB");
+        std::string wrapName = dict.GetOneString("wrap", "repeat");
+        TextureImage::Wrap wrap;
+        if (wrapName == "repeat") wrap = TextureImage::Wrap::Repeat;
+        else if (wrapName == "black") wrap = TextureImage::Wrap::Black;
+        else if (wrapName == "clamp") wrap = TextureImage::Wrap::Clamp;
+        else throw PbrtError(dict.Loc("wrap"), "texture wrap mode \"" + wrapName + "\" is not supported");
+        std::string filter = dict.GetOneString("filter", "bilinear");
+        if (filter != "bilinear" && filter != "point")
+            Warning(dict.Loc("filter"), "texture filter \"" + filter + "\" is rendered as \"bilinear\"");
+        dict.GetOneFloat("maxanisotropy", 8);
+        imageScale = dict.GetOneFloat("scale", 1);
+        imageInvert = dict.GetOneBool("invert", false);
+        std::string key = path + "|" + encoding + "|" + wrapName;
+        auto it = textureImages.find(key);
+        if (it == textureImages.end()) {
+            try {
+                it = textureImages.emplace(key, LoadTextureImage(path, encoding, wrap)).first;
+            } catch (const PbrtError &e) {
+                throw PbrtError(dict.Loc("filename"), e.what());
+            }
+        }
+        image = it->second;
+    }
+
+    if (type == "float") {
+        FloatTextureHandle t;
+        if (texname == "constant") t = MakeConstantFloatTexture(dict.GetOneFloat("value", 1));
+        else if (texname == "checkerboard") {
+            UVMapping m = mapping();
+            int d = dimension();
+            t = MakeCheckerboardFloatTexture(m, d, res.floats("tex1", 1), res.floats("tex2", 0));
+        } else if (texname == "scale") t = MakeScaleFloatTexture(res.floats("tex", 1), res.floats("scale", 1));
+        else if (texname == "mix")
+            t = MakeMixFloatTexture(res.floats("tex1", 0), res.floats("tex2", 1), res.floats("amount", 0.5f));
+        else if (texname == "imagemap") t = MakeImageFloatTexture(mapping(), image, imageScale, imageInvert);
+        else unsupported();
+        CheckUnused(dict, "Texture \"" + name + "\"");
+        floatTextures[name] = t;
+        return;
+    }
+    // Spectrum textures are made twice, as reflectance (clamped to [0, 1]) and unbounded,
+    // and the material parameter that uses one picks the flavour (as pbrt-v4 does).
+    for (SpectrumType st : {SpectrumType::Albedo, SpectrumType::Unbounded}) {
+        // Re-resolve parameters for this flavour; nested textures come from the same flavour.
+        TextureResolver r;
+        r.floats = res.floats;
+        r.spectrum = [&](const std::string &n, SpectrumHandle def, SpectrumType) {
+            return res.spectrum(n, def, st);
+        };
+        auto one = std::make_shared<ConstantSpectrum>(1.f), zero = std::make_shared<ConstantSpectrum>(0.f);
+        SpectrumTextureHandle t;
+        if (texname == "constant") t = r.spectrum("value", one, st);
+        else if (texname == "checkerboard") {
+            UVMapping m = mapping();
+            int d = dimension();
+            t = MakeCheckerboardSpectrumTexture(m, d, r.spectrum("tex1", one, st), r.spectrum("tex2", zero, st));
+        } else if (texname == "scale") t = MakeScaleSpectrumTexture(r.spectrum("tex", one, st), r.floats("scale", 1));
+        else if (texname == "mix")
+            t = MakeMixSpectrumTexture(r.spectrum("tex1", zero, st), r.spectrum("tex2", one, st), r.floats("amount", 0.5f));
+        else if (texname == "imagemap")
+            t = MakeImageSpectrumTexture(mapping(), image, imageScale, imageInvert, st, &cs);
+        else unsupported();
+        (st == SpectrumType::Albedo ? albedoTextures : unboundedTextures)[name] = t;
+    }
+    CheckUnused(dict, "Texture \"" + name + "\"");
+}
+
+// --- Lights ------------------------------------------------------------------------------------
+void SceneBuilder::LightSource(const std::string &name, ParsedParameterVector params, FileLoc loc) {
+    RequireWorld("LightSource", loc);
+    if (currentObject != 0) throw PbrtError(loc, "LightSource inside an object definition is not supported");
+    CheckNoMotion(loc, "LightSource");
+    ParameterDictionary dict(Concat(std::move(params), graphicsState.lightAttributes));
+    const char *specName = (name == "point" || name == "spot" || name == "goniometric" || name == "projection") ? "I" : "L";
+    SpectrumHandle spec = GetSpectrum(dict, specName, SpectrumType::Illuminant, *graphicsState.colorSpace);
+    Light light = Light::Create(name, dict, graphicsState.ctm[0], spec, *graphicsState.colorSpace, loc);
+    CheckUnused(dict, "LightSource \"" + name + "\"");
+    if (light.IsInfinite() && light.Type() == LightType::UniformInfinite)
+        scene->infiniteLights.push_back(int(scene->lights.size()));
+    scene->lights.push_back(std::move(light));
+}
+
+// --- Shapes ------------------------------------------------------------------------------------
+void SceneBuilder::Shape(const std::string &name, ParsedParameterVector params, FileLoc loc) {
+    RequireWorld("Shape", loc);
+    CheckNoMotion(loc, "Shape");
+    ParameterDictionary dict(Concat(std::move(params), graphicsState.shapeAttributes));
+    ShapeSet shapes = CreateShapes(name, dict, graphicsState.ctm[0], graphicsState.reverseOrientation, loc);
+    CheckUnused(dict, "Shape \"" + name + "\"");
+
+    int material = ResolveMaterial(graphicsState.material);
+    if (std::holds_alternative<InterfaceMaterial>(scene->materials[material])) {
+        material = -1;
+        scene->hasInterfaces = true;
+    }
+
+    // Emission: one area light per triangle / sphere.
+    std::optional<ParameterDictionary> lightDict;
+    SpectrumHandle L;
+    if (graphicsState.areaLight) {
+        if (currentObject != 0) {
+            Warning(loc, "area lights are not supported inside object instances (as in pbrt-v4); "
+                         "the shape does not emit");
+        } else {
+            const AreaLightDesc &al = *graphicsState.areaLight;
+            lightDict.emplace(al.params);
+            L = GetSpectrum(*lightDict, "L", SpectrumType::Illuminant, *al.colorSpace);
+        }
+    }
+    auto addLights = [&](std::shared_ptr<const TriangleMesh> mesh, const Sphere *sphere) {
+        if (!lightDict) return -1;
+        int offset = int(scene->lights.size());
+        Light::CreateArea(*lightDict, L, *graphicsState.areaLight->colorSpace, mesh, sphere,
+                          graphicsState.areaLight->loc, &scene->lights);
+        return offset;
+    };
+    for (auto &mesh : shapes.meshes) {
+        if (mesh->NumTriangles() == 0) continue;
+        int lightOffset = addLights(mesh, nullptr);
+        scene->accel->AddMesh(currentObject, mesh, material, lightOffset);
+    }
+    for (const Sphere &s : shapes.spheres) {
+        int lightOffset = addLights(nullptr, &s);
+        scene->accel->AddSphere(currentObject, s, material, lightOffset);
+    }
+    if (lightDict) CheckUnused(*lightDict, "AreaLightSource \"diffuse\"");
+}
+
+// --- End: everything that needs the whole scene -------------------------------------------
+void SceneBuilder::EndOfFiles() {
+    if (!pushedStates.empty())
+        throw PbrtError(pushKinds.back().second, "AttributeBegin/ObjectBegin without a matching end");
+    // Object instances.
+    for (const PendingInstance &inst : instances) {
+        auto it = objects.find(inst.name);
+        if (it == objects.end()) throw PbrtError(inst.loc, "ObjectInstance: object \"" + inst.name + "\" is not defined");
+        scene->accel->AddInstance(it->second, inst.renderFromInstance);
+    }
+    scene->accel->Commit();
+
+    // Film, camera, sampler, integrator (pbrt-v4 defaults when a directive is absent).
+    Desc film = filmDesc ? *filmDesc : Desc{"rgb", {}, FileLoc{}, graphicsState.colorSpace};
+    ParameterDictionary filmDict(film.params);
+    FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
+                                           opts.resolution, opts.resolutionScale, film.loc);
+    CheckUnused(filmDict, "Film \"" + film.name + "\"");
+
+    Desc cam = cameraDesc ? *cameraDesc : Desc{"perspective", {}, FileLoc{}, nullptr};
+    ParameterDictionary camDict(cam.params);
+    scene->camera = std::make_unique<pbrt::Camera>(
+        pbrt::Camera::Create(cam.name, camDict, cameraFromWorld, fs.fullResolution, cam.loc));
+    CheckUnused(camDict, "Camera \"" + cam.name + "\"");
+    scene->film = std::make_unique<RGBFilm>(fs, scene->camera->ExposureTime());
+
+    Desc samp = samplerDesc ? *samplerDesc : Desc{"zsobol", {}, FileLoc{}, nullptr};
+    ParameterDictionary sampDict(samp.params);
+    uint64_t seed = 0;
+    if (optionSeed) seed = uint64_t(*optionSeed);
+    int samplerSeed = sampDict.GetOneInt("seed", int(seed));
+    seed = opts.seed ? *opts.seed : uint64_t(int64_t(samplerSeed));
+    int spp = sampDict.GetOneInt("pixelsamples", 16);
+    if (samp.name == "stratified") {
+        int xs = sampDict.GetOneInt("xsamples", 4), ys = sampDict.GetOneInt("ysamples", 4);
+        bool jitter = sampDict.GetOneBool("jitter", true);
+        if (opts.spp) {
+            // pbrt-v4: the most square factorization of the requested count.
+            int n = *opts.spp, div = int(std::sqrt(double(n)));
+            while (n % div) --div;
+            ys = n / div;
+            xs = n / ys;
+        }
+        if (xs < 1 || ys < 1) throw PbrtError(samp.loc, "stratified sampler: xsamples and ysamples must be >= 1");
+        scene->sampler = pbrt::Sampler(SamplerType::Stratified, xs * ys, seed, xs, ys, jitter);
+    } else {
+        if (opts.spp) spp = *opts.spp;
+        if (spp < 1) throw PbrtError(samp.loc, "\"pixelsamples\" must be at least 1");
+        if (samp.name == "independent")
+            scene->sampler = pbrt::Sampler(SamplerType::Independent, spp, seed);
+        else if (samp.name == "sobol" || samp.name == "zsobol" || samp.name == "paddedsobol" ||
+                 samp.name == "halton" || samp.name == "pmj02bn") {
+            sampDict.GetOneString("randomization", "");  // any scrambling converges alike
+            scene->sampler = pbrt::Sampler(SamplerType::Sobol, spp, seed);
+        } else
+            throw PbrtError(samp.loc, "Sampler \"" + samp.name + "\" is not supported");
+    }
+    CheckUnused(sampDict, "Sampler \"" + samp.name + "\"");
+
+    // pbrt-v4's default integrator is "volpath", which we render as "path" (no media).
+    Desc integ = integratorDesc ? *integratorDesc : Desc{"path", {}, FileLoc{}, nullptr};
+    ParameterDictionary integDict(integ.params);
+    scene->integrator = IntegratorSettings::Create(integ.name, integDict, integ.loc);
+    CheckUnused(integDict, "Integrator \"" + integ.name + "\"");
+    if (opts.maxDepth) scene->integrator.maxDepth = *opts.maxDepth;
+
+    // Wavelength sampling.
+    if (opts.wavelengthSampling == "visible") scene->wavelengths = WavelengthSampler::Visible();
+    else if (opts.wavelengthSampling == "uniform")
+        scene->wavelengths = WavelengthSampler::Uniform(opts.lambdaMin, opts.lambdaMax);
+    else throw PbrtError("unknown wavelength sampling \"" + opts.wavelengthSampling + "\"");
+
+    // Lights that need the scene bounds, and the light sampler.
+    for (Light &l : scene->lights) l.Preprocess(scene->accel->Bounds());
+    scene->lightSampler = LightSampler(scene->lights);
+    if (scene->lights.empty()) Warning("the scene has no lights; the image will be black");
+}
+
+std::unique_ptr<Scene> Build(const RenderOptions &opts, const std::function<void(ParserTarget *)> &parse) {
+    auto scene = std::make_unique<Scene>();
+    SceneBuilder builder(scene.get(), opts);
+    parse(&builder);
+    return scene;
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> LoadScene(const std::vector<std::string> &files, const RenderOptions &opts) {
+    return Build(opts, [&](ParserTarget *t) { ParseFiles(t, files); });
+}
+
+std::unique_ptr<Scene> LoadSceneFromString(const std::string &text, const RenderOptions &opts,
+                                           const std::string &name) {
+    return Build(opts, [&](ParserTarget *t) { ParseString(t, text, name); });
+}
+
+}  // namespace pbrt

@@ -1,0 +1,54 @@
+// A scene ready to render, and how it is built from pbrt-v4 scene files.
+//
+// The builder (scene.cpp) implements the parser's ParserTarget: the graphics state stack
+// (CTM, ReverseOrientation, material, area light, colour space, Attribute defaults), named
+// coordinate systems, materials, textures and object instances, and the scene-wide
+// directives. What it does not support and would change the picture (a material type,
+// shape, light, parameter, participating media, motion blur) is a PbrtError naming it and
+// its file:line; what cannot change the picture is at most a warning.
+#pragma once
+
+#include <pbrt/accel.h>
+#include <pbrt/camera.h>
+#include <pbrt/film.h>
+#include <pbrt/filter.h>
+#include <pbrt/integrator.h>
+#include <pbrt/lights.h>
+#include <pbrt/materials.h>
+#include <pbrt/options.h>
+#include <pbrt/sampler.h>
+#include <pbrt/wavelengths.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pbrt {
+
+struct Scene {
+    std::unique_ptr<Accelerator> accel;
+    std::vector<Material> materials;
+    std::vector<Light> lights;
+    std::vector<int> infiniteLights;   // indices of lights seen by escaping rays
+    LightSampler lightSampler;
+    bool hasInterfaces = false;        // any "interface" surfaces (shadow rays pass them)
+
+    std::unique_ptr<Camera> camera;
+    std::unique_ptr<RGBFilm> film;
+    Filter filter = Filter::Gaussian({1.5f, 1.5f}, 0.5f);
+    Sampler sampler;
+    IntegratorSettings integrator;
+    WavelengthSampler wavelengths = WavelengthSampler::Visible();
+    bool disablePixelJitter = false, disableWavelengthJitter = false;
+
+    // Whether nothing opaque lies on the segment of a shadow ray.
+    bool Unoccluded(const Ray &ray) const;
+};
+
+// Parses the files (standard input if none) and builds the scene, applying the options.
+std::unique_ptr<Scene> LoadScene(const std::vector<std::string> &files, const RenderOptions &opts);
+// The same for scene text in memory (`name` names it in error messages).
+std::unique_ptr<Scene> LoadSceneFromString(const std::string &text, const RenderOptions &opts,
+                                           const std::string &name = "<string>");
+
+}  // namespace pbrt
