@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Renderer benchmark: paths per CPU-second for each evaluation scene, in one run.
 
-Renders every ``../shared/scenes/*/scene-v4.pbrt`` (the Cornell box first) at 256x256 with
-maximum depth 5 and prints the throughput that ``pbrt`` reports in its closing line
-(paths / (user + system CPU time of the render)). Scenes that need features the renderer
-does not have yet are listed with the reason. For scale, upstream pbrt-v4 renders the
+Renders the six evaluation scenes ``../shared/scenes/<scene>/scene-v4.pbrt`` (cornell-box,
+veach-mis, teapot, veach-bidir, staircase, glass-of-water) at 256x256 with maximum depth 5
+and prints the throughput that ``pbrt`` reports in its closing line (paths / (user + system
+CPU time of the render)). A scene that is missing or fails to render is listed with the
+reason, and the exit status is then 1. For scale, upstream pbrt-v4 renders the
 256x256 Cornell box (maxdepth 5) at about 0.17 M paths per CPU-second on a 2-core machine
 of this kind; the ratio to that figure is printed too.
 
@@ -21,6 +22,8 @@ import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 UPSTREAM_CORNELL_MPATHS_PER_CPU_S = 0.17  # pbrt-v4, 256x256 Cornell box, maxdepth 5, 2 cores
+# The evaluation scenes (../shared/scenes/README.md), the Cornell box first.
+SCENES = ("cornell-box", "veach-mis", "teapot", "veach-bidir", "staircase", "glass-of-water")
 
 CLOSING = re.compile(r"rendered in ([0-9.]+) s: (\d+) paths, ([0-9.]+) M paths/s, ([0-9.]+) M paths per CPU-second")
 
@@ -49,22 +52,27 @@ def main() -> int:
     if not args.pbrt.exists():
         print(f"bench_renderer: {args.pbrt} not found (build it with scripts/setup.sh)", file=sys.stderr)
         return 1
-    scenes = sorted((args.shared / "scenes").glob("*/scene-v4.pbrt"),
-                    key=lambda p: (p.parent.name != "cornell-box", p.parent.name))
-    if not scenes:
+    if not (args.shared / "scenes").is_dir():
         print(f"bench_renderer: no scenes under {args.shared / 'scenes'}", file=sys.stderr)
         return 1
+    scenes = [args.shared / "scenes" / name / "scene-v4.pbrt" for name in SCENES]
+    failures = 0
     print(f"pbrt: {args.pbrt}; 256x256, maxdepth 5, {args.spp} spp")
     with tempfile.TemporaryDirectory() as tmp:
         for scene in scenes:
-            status, text = bench_scene(args.pbrt, scene, args.spp, pathlib.Path(tmp) / "out.exr")
             name = scene.parent.name
+            if not scene.exists():
+                print(f"  {name:15s} missing: {scene}")
+                failures += 1
+                continue
+            status, text = bench_scene(args.pbrt, scene, args.spp, pathlib.Path(tmp) / "out.exr")
+            failures += status != "ok"
             print(f"  {name:15s} {text}" if status == "ok" else f"  {name:15s} skipped: {text}")
             if status == "ok" and name == "cornell-box":
                 per_cpu = float(text.split()[0])
                 print(f"  {'':15s} {per_cpu / UPSTREAM_CORNELL_MPATHS_PER_CPU_S:.2f}x upstream pbrt-v4's "
                       f"{UPSTREAM_CORNELL_MPATHS_PER_CPU_S} M paths/CPU-s")
-    return 0
+    return 1 if failures else 0
 
 
 if __name__ == "__main__":

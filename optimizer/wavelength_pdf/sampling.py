@@ -61,8 +61,9 @@ def _normalized_with_cdf(grid: Array, p: Array) -> tuple[Array, Array]:
     seg = 0.5 * (p[1:] + p[:-1]) * _segment_widths(grid)
     cum = jnp.concatenate([jnp.zeros((1,), dtype=seg.dtype), jnp.cumsum(seg)])
     total = cum[-1]
-    # x / x == 1 exactly in IEEE arithmetic, so F[M] is exactly 1.
-    return p / total, cum / total
+    # x / x == 1 exactly in IEEE arithmetic, so F[M] is exactly 1. XLA may sum the prefixes
+    # in different orders, so a plateau at the top can come out an ulp above 1: clip.
+    return p / total, jnp.minimum(cum / total, 1.0)
 
 
 def cdf(grid: Array, p: Array) -> Array:
@@ -76,22 +77,98 @@ def cdf(grid: Array, p: Array) -> Array:
     return _normalized_with_cdf(grid, p)[1]
 
 
-def _last_segment_with_mass(F: Array) -> Array:
-    """Index of the last segment whose probability is positive."""
-    has_mass = (F[1:] - F[:-1]) > 0
+def _last_segment_with_mass(pn: Array) -> Array:
+    """Index of the last segment whose density is not zero at both ends.
+
+    Judged from the node values, not from CDF differences, which rounding can make an ulp
+    positive on a segment without probability.
+    """
+    has_mass = (pn[1:] + pn[:-1]) > 0
     m = has_mass.shape[0]
     return m - 1 - jnp.argmax(has_mass[::-1])
+
+
+def normalized_with_cdf(grid: Array, p: Array) -> tuple[Array, Array]:
+    """Normalized node values and the CDF at the nodes (F[0] = 0, F[M] = 1 exactly).
+
+    Returns
+    -------
+    pn : (M+1,) array, 1/nm
+    F : (M+1,) array
+    """
+    return _normalized_with_cdf(grid, p)
+
+
+def sample_segment(grid: Array, pn: Array, F: Array, u: Array) -> tuple[Array, Array]:
+    """Segment index and offset of lambda = F^-1(u) for an already normalized density.
+
+    Inside segment i (width h, node values p0, p1, slope s = (p1 - p0) / h) the CDF is
+    F_i + p0 t + s t^2 / 2, so the offset t solves s t^2 / 2 + p0 t - r = 0 with
+    r = u - F_i. The root is taken in the form t = 2 r / (p0 + sqrt(p0^2 + 2 s r)), which
+    has no cancellation (both terms of the denominator are >= 0), tends to r / p0 when
+    s -> 0 and to sqrt(2 r / s) when p0 = 0. Segments without probability (density zero
+    at both ends) are never selected.
+
+    Parameters
+    ----------
+    grid : (M+1,) array, nm
+    pn, F : (M+1,) arrays
+        Output of ``normalized_with_cdf``.
+    u : array in [0, 1]
+
+    Returns
+    -------
+    i : int array, same shape as ``u``
+        Segment [grid[i], grid[i+1]] that holds the wavelength.
+    t : array, same shape as ``u``, nm
+        Offset from grid[i], in [0, grid[i+1] - grid[i]].
+    """
+    u = jnp.clip(jnp.asarray(u), 0.0, 1.0)
+    # Largest i with F_i <= u skips zero-probability segments on the left of u ...
+    i = jnp.searchsorted(F, u, side="right") - 1
+    # ... and u = 1 must not land in a zero-probability tail.
+    i = jnp.clip(i, 0, _last_segment_with_mass(pn))
+    return i, solve_in_segment(grid, pn, F, i, u)
+
+
+def _stable_root(a: Array, s: Array, r: Array) -> Array:
+    """The root t >= 0 of s t^2 / 2 + a t = r (a >= 0, r >= 0) as 2 r / (a + sqrt(a^2 + 2 s r)).
+
+    Both terms of the denominator are >= 0, so nothing cancels; guarded square root and
+    division keep NaN out of gradients of the unselected branch (the double-where idiom).
+    """
+    disc = a * a + 2.0 * s * r
+    disc_pos = disc > 0
+    root = jnp.where(disc_pos, jnp.sqrt(jnp.where(disc_pos, disc, 1.0)), 0.0)
+    den = a + root
+    den_pos = den > 0
+    return jnp.where(den_pos, 2.0 * r / jnp.where(den_pos, den, 1.0), 0.0)
+
+
+def solve_in_segment(grid: Array, pn: Array, F: Array, i: Array, u: Array) -> Array:
+    """Offset t (nm) from grid[i] at which the CDF reaches u, for u in [F_i, F_{i+1}].
+
+    The stable quadratic solve of ``sample_segment`` for a segment that is already known
+    (the objective knows it from the order of its u-breakpoints). On a falling segment the
+    quadratic is solved from the right end (mass F_{i+1} - u, density p1 - s tau at
+    distance tau to the left): the end where the density is smaller is where the inverse
+    is ill-conditioned, and measuring from it makes u = F_{i+1} land exactly on the node.
+    """
+    h = grid[i + 1] - grid[i]
+    p0 = pn[i]
+    p1 = pn[i + 1]
+    s = (p1 - p0) / h
+    t_left = _stable_root(p0, s, jnp.maximum(u - F[i], 0.0))
+    tau = _stable_root(p1, -s, jnp.maximum(F[i + 1] - u, 0.0))
+    t = jnp.where(p1 < p0, h - tau, t_left)
+    return jnp.clip(t, 0.0, h)
 
 
 def sample(grid: Array, p: Array, u: Array) -> Array:
     """Draw wavelengths lambda = F^-1(u) exactly from one piecewise-linear density.
 
-    Inside segment i (width h, node values p0, p1 after normalization, slope
-    s = (p1 - p0) / h) the CDF is F_i + p0 t + s t^2 / 2, so the offset t solves
-    s t^2 / 2 + p0 t - r = 0 with r = u - F_i. The root is taken in the form
-    t = 2 r / (p0 + sqrt(p0^2 + 2 s r)), which has no cancellation (both terms of the
-    denominator are >= 0), tends to r / p0 when s -> 0 and to sqrt(2 r / s) when p0 = 0.
-    Segments without probability (density zero at both ends) are never selected.
+    The quadratic of each segment is solved in a cancellation-free form (see
+    ``sample_segment``); zero-probability segments are never selected.
 
     Parameters
     ----------
@@ -105,26 +182,8 @@ def sample(grid: Array, p: Array, u: Array) -> Array:
         u = 0 maps to the left end of the support and u = 1 to its right end.
     """
     grid = jnp.asarray(grid)
-    u = jnp.asarray(u)
     pn, F = _normalized_with_cdf(grid, p)
-    u = jnp.clip(u, 0.0, 1.0)
-    # Largest i with F_i <= u skips zero-probability segments on the left of u ...
-    i = jnp.searchsorted(F, u, side="right") - 1
-    # ... and u = 1 must not land in a zero-probability tail.
-    i = jnp.clip(i, 0, _last_segment_with_mass(F))
-    h = grid[i + 1] - grid[i]
-    p0 = pn[i]
-    s = (pn[i + 1] - p0) / h
-    r = jnp.maximum(u - F[i], 0.0)
-    disc = p0 * p0 + 2.0 * s * r
-    # Guarded square root and division: the unselected branch must not put NaN into
-    # gradients (the double-where idiom).
-    disc_pos = disc > 0
-    root = jnp.where(disc_pos, jnp.sqrt(jnp.where(disc_pos, disc, 1.0)), 0.0)
-    den = p0 + root
-    den_pos = den > 0
-    t = jnp.where(den_pos, 2.0 * r / jnp.where(den_pos, den, 1.0), 0.0)
-    t = jnp.clip(t, 0.0, h)
+    i, t = sample_segment(grid, pn, F, u)
     return grid[i] + t
 
 

@@ -243,6 +243,7 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
         si->n = Normalize(xf->ApplyNormal(si->n));
         si->ns = Normalize(xf->ApplyNormal(si->ns));
         si->dpdu = xf->ApplyVector(si->dpdu);
+        si->dpdv = xf->ApplyVector(si->dpdv);
     }
     si->tHit = t;
     si->wo = -Normalize(ray.d);

@@ -16,9 +16,8 @@
 // by 1/eta^2, importance not) and which of reflection/transmission Sample_f/PDF may choose.
 #pragma once
 
-// BSDFSample, DiffuseBxDF, CosTheta/SameHemisphere. (For bsdf.h's variant to list these
-// classes, those definitions have to move to a header of their own that both include.)
-#include <pbrt/bsdf.h>
+// BSDFSample, DiffuseBxDF, CosTheta/SameHemisphere.
+#include <pbrt/bxdf.h>
 #include <pbrt/fresnel.h>
 #include <pbrt/microfacet.h>
 #include <pbrt/phase.h>

@@ -56,7 +56,7 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
 
 }  // namespace
 
-SampledSpectrum PathLi(const Scene &scene, Ray ray, const SampledWavelengths &lambda,
+SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                        Sampler &sampler, int maxDepth) {
     SampledSpectrum L(0), beta(1);
     int depth = 0, skips = 0;
@@ -99,7 +99,15 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, const SampledWavelengths &la
 
         // "interface" surfaces: continue through without counting a bounce.
         std::optional<BSDF> bsdf;
-        if (si.material >= 0) bsdf = GetBSDF(scene.materials[si.material], si, lambda);
+        if (si.material >= 0) {
+            bool wasTerminated = lambda.SecondaryTerminated();
+            bsdf = GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); });
+            // Dispersion kept one wavelength: the other slots no longer count (their pdf is
+            // 0); zero their throughput so that they cannot steer Russian roulette.
+            if (!wasTerminated && lambda.SecondaryTerminated())
+                for (int i = 0; i < NSpectrumSamples; ++i)
+                    if (i != lambda.SurvivingIndex()) beta[i] = 0;
+        }
         if (!bsdf) {
             if (++skips > 256) break;
             ray = si.SpawnRay(ray.d);

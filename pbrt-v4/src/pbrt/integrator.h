@@ -26,8 +26,10 @@ struct IntegratorSettings {
                                      const FileLoc &loc);
 };
 
-// Radiance arriving along `ray` at the camera, at the wavelengths lambda.
-SampledSpectrum PathLi(const Scene &scene, Ray ray, const SampledWavelengths &lambda,
+// Radiance arriving along `ray` at the camera, at the wavelengths lambda. A dispersive
+// material on the path terminates lambda's secondary wavelengths (SPEC 1), so the caller
+// must weight the result with lambda as it is after the call.
+SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                        Sampler &sampler, int maxDepth);
 
 }  // namespace pbrt

@@ -14,6 +14,7 @@ struct SurfaceInteraction {
     Normal3f ns;        // shading normal (same side as n)
     Vector3f dpdu;      // surface tangent along u (the shading frame's x before
                         // orthogonalization); may be zero
+    Vector3f dpdv;      // surface tangent along v (bump mapping); may be zero
     Point2f uv;
     Vector3f wo;        // direction back along the incoming ray (normalized)
     Float tHit = 0;

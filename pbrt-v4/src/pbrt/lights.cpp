@@ -224,6 +224,7 @@ Light Light::Create(const std::string &name, const ParameterDictionary &params,
     if (!spec) spec = cs.IlluminantHandle();
     l.spectrum = FastLookup(spec);
     l.spectralWeight = SpectralWeight(*spec);
+    l.loc = std::make_shared<const FileLoc>(loc);
     l.scale = params.GetOneFloat("scale", 1);
     if (!std::isfinite(l.scale) || l.scale < 0) throw PbrtError(params.Loc("scale"), "light \"scale\" must be finite and >= 0");
     auto point3 = [&](const char *n, std::array<Float, 3> def) {
@@ -288,6 +289,7 @@ void Light::CreateArea(const ParameterDictionary &params, SpectrumHandle spec,
     base.type = LightType::DiffuseArea;
     base.spectrum = FastLookup(spec);
     base.spectralWeight = SpectralWeight(*spec);
+    base.loc = std::make_shared<const FileLoc>(loc);
     base.twoSided = params.GetOneBool("twosided", false);
     base.scale = params.GetOneFloat("scale", 1);
     if (!std::isfinite(base.scale) || base.scale < 0)

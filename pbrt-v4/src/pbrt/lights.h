@@ -73,6 +73,11 @@ class Light {
     bool SampledByNEE() const { return type != LightType::UniformInfinite; }
     // A scalar proportional to the emitted power (weights for light selection).
     Float Power() const;
+    // The emission spectrum (before "scale") and where the light was defined (the
+    // LightSource / AreaLightSource directive; empty if unknown): for the check that the
+    // wavelength sampler covers every emitter (wavelength_coverage.h).
+    const SpectrumHandle &EmissionSpectrum() const { return spectrum; }
+    FileLoc Loc() const { return loc ? *loc : FileLoc{}; }
 
     // --- Construction --------------------------------------------------------------------
     // A non-area light from a LightSource directive; spectrumL is the already-built "L"/"I"
@@ -90,6 +95,7 @@ class Light {
     SpectrumHandle spectrum;  // emission spectrum (densely sampled), times scale
     Float scale = 1;
     Float spectralWeight = 0; // integral of spectrum * (xbar + ybar + zbar), for Power()
+    std::shared_ptr<const FileLoc> loc;  // shared by the triangles of one area light
     // Point and spot lights.
     Transform renderFromLight;
     Point3f position;

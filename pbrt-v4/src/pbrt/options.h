@@ -20,6 +20,8 @@ struct RenderOptions {
     // [lambdaMin, lambdaMax] (stratified).
     std::string wavelengthSampling = "visible";
     Float lambdaMin = 360, lambdaMax = 830;
+    std::string wavelengthTable;          // --wavelength-pdf FILE: sample from a table (issue 4)
+    Float defensiveShare = 0;             // --wavelength-pdf-defensive S: uniform share in [0, 1]
     Point2i resolution{0, 0};             // --resolution WxH (0: the film's)
     Float resolutionScale = 1;            // --resolution-scale S: multiplies the resolution
     std::optional<int> maxDepth;          // --maxdepth: overrides the integrator's

@@ -3,6 +3,7 @@
 #include <pbrt/color.h>
 #include <pbrt/paramdict.h>
 #include <pbrt/parser.h>
+#include <pbrt/wavelength_coverage.h>
 
 #include <cctype>
 #include <cmath>
@@ -339,7 +340,9 @@ class SceneBuilder : public ParserTarget {
     TextureResolver Resolver(const ParameterDictionary &dict, const RGBColorSpace &cs) const;
     pbrt::Material MakeMaterial(const std::string &type, const ParameterDictionary &dict,
                                 const FileLoc &loc) const {
-        pbrt::Material m = CreateMaterial(type, dict, Resolver(dict, *graphicsState.colorSpace), loc);
+        // The layered material's random walks are seeded like the sampler (--seed, Option).
+        uint64_t seed = opts.seed ? *opts.seed : uint64_t(optionSeed.value_or(0));
+        pbrt::Material m = CreateMaterial(type, dict, Resolver(dict, *graphicsState.colorSpace), loc, seed);
         CheckUnused(dict, "material \"" + type + "\"");
         return m;
     }
@@ -700,8 +703,10 @@ void SceneBuilder::EndOfFiles() {
     CheckUnused(integDict, "Integrator \"" + integ.name + "\"");
     if (opts.maxDepth) scene->integrator.maxDepth = *opts.maxDepth;
 
-    // Wavelength sampling.
-    if (opts.wavelengthSampling == "visible") scene->wavelengths = WavelengthSampler::Visible();
+    // Wavelength sampling (a table, issue 4, or a built-in sampler).
+    if (!opts.wavelengthTable.empty())
+        scene->wavelengths = WavelengthSampler::FromTable(opts.wavelengthTable, opts.defensiveShare);
+    else if (opts.wavelengthSampling == "visible") scene->wavelengths = WavelengthSampler::Visible();
     else if (opts.wavelengthSampling == "uniform")
         scene->wavelengths = WavelengthSampler::Uniform(opts.lambdaMin, opts.lambdaMax);
     else throw PbrtError("unknown wavelength sampling \"" + opts.wavelengthSampling + "\"");
@@ -710,6 +715,8 @@ void SceneBuilder::EndOfFiles() {
     for (Light &l : scene->lights) l.Preprocess(scene->accel->Bounds());
     scene->lightSampler = LightSampler(scene->lights);
     if (scene->lights.empty()) Warning("the scene has no lights; the image will be black");
+    // SPEC 1: a light emitting where the sampling density is zero biases the image.
+    for (const std::string &w : UnsampledEmissionWarnings(scene->wavelengths, scene->lights)) Warning(w);
 }
 
 std::unique_ptr<Scene> Build(const RenderOptions &opts, const std::function<void(ParserTarget *)> &parse) {

@@ -59,13 +59,15 @@ void TriangleMesh::Interaction(size_t tri, Float b1, Float b2, SurfaceInteractio
     Vector2f duv02 = uv0 - uv2, duv12 = uv1 - uv2;
     Vector3f dp02 = p0 - p2, dp12 = p1 - p2;
     Float det = duv02.x * duv12.y - duv02.y * duv12.x;
-    Vector3f dpdu;
-    if (std::abs(det) > 1e-9f) dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
-    if (LengthSquared(Cross(dpdu, si->n)) == 0) {
-        Vector3f dpdv;
-        CoordinateSystem(si->n, &dpdu, &dpdv);
+    Vector3f dpdu, dpdv;
+    if (std::abs(det) > 1e-9f) {
+        dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
+        dpdv = (dp12 * duv02.x - dp02 * duv12.x) / det;
     }
+    if (LengthSquared(Cross(dpdu, si->n)) == 0 || LengthSquared(Cross(dpdv, si->n)) == 0)
+        CoordinateSystem(si->n, &dpdu, &dpdv);
     si->dpdu = dpdu;
+    si->dpdv = dpdv;
 
     // Shading normal: interpolated N decides the side of the geometric normal.
     si->ns = si->n;
@@ -187,10 +189,13 @@ void Sphere::Interaction(const Point3f &pObjIn, SurfaceInteraction *si) const {
     if (reverseOrientation) n = -n;
     si->n = si->ns = n;
     si->dpdu = renderFromObject.ApplyVector(Vector3f(-phiMax * pObj.y, phiMax * pObj.x, 0));
-    if (LengthSquared(Cross(si->dpdu, n)) == 0) {
-        Vector3f dpdv;
-        CoordinateSystem(n, &si->dpdu, &dpdv);
-    }
+    // dp/dv = (thetaMax - thetaMin) (z cos(phi), z sin(phi), -r sin(theta)).
+    Float zr = std::sqrt(Sqr(pObj.x) + Sqr(pObj.y));
+    Float cosPhi = zr > 0 ? pObj.x / zr : 1, sinPhi = zr > 0 ? pObj.y / zr : 0;
+    si->dpdv = renderFromObject.ApplyVector(
+        (thetaZMax - thetaZMin) * Vector3f(pObj.z * cosPhi, pObj.z * sinPhi, -radius * std::sin(theta)));
+    if (LengthSquared(Cross(si->dpdu, n)) == 0 || LengthSquared(Cross(si->dpdv, n)) == 0)
+        CoordinateSystem(n, &si->dpdu, &si->dpdv);
     Float rs = radius * Length(renderFromObject.ApplyVector(Vector3f(1, 0, 0)));
     si->pError = (Abs(si->p) + Vector3f(rs, rs, rs)) * kPointErrorScale;
     si->faceIndex = 0;

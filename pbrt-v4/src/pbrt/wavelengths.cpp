@@ -1,5 +1,7 @@
 #include <pbrt/wavelengths.h>
 
+#include <wavelength_table.h>
+
 #include <sstream>
 
 namespace pbrt {
@@ -12,6 +14,55 @@ std::string UniformWavelengthSampler::Description() const {
     std::ostringstream s;
     s << "uniform on " << lmin << ".." << lmax << " nm, 4 stratified";
     return s.str();
+}
+
+// ---- Table-driven sampling (issue 4) ------------------------------------------------------
+static_assert(NSpectrumSamples == wavelength_table::kNumDensities,
+              "a wavelength table holds one density per wavelength of a path");
+
+SampledWavelengths TableWavelengthSampler::Sample(Float u) const {
+    double lambda[NSpectrumSamples], pdf[NSpectrumSamples];
+    wavelength_table::SampleFour(*table, u, lambda, pdf);
+    // The table is kept in double precision; the path carries Float.
+    Float l[NSpectrumSamples], p[NSpectrumSamples];
+    for (int i = 0; i < NSpectrumSamples; ++i) {
+        l[i] = Float(lambda[i]);
+        p[i] = Float(pdf[i]);
+    }
+    return SampledWavelengths::FromArrays(l, p);
+}
+
+Float TableWavelengthSampler::PDF(Float lambda) const {
+    return Float(wavelength_table::MixturePdf(*table, lambda));
+}
+
+Float TableWavelengthSampler::MinLambda() const { return Float(table->grid.front()); }
+Float TableWavelengthSampler::MaxLambda() const { return Float(table->grid.back()); }
+
+std::string TableWavelengthSampler::Description() const {
+    std::ostringstream s;
+    s << "table " << table->source << " (" << table->grid.size() << " nodes, "
+      << table->grid.front() << ".." << table->grid.back() << " nm";
+    if (share > 0) s << ", defensive share " << share;
+    s << ")";
+    return s.str();
+}
+
+WavelengthSampler WavelengthSampler::FromTable(const std::string &path, Float defensiveShare) {
+    if (!(defensiveShare >= 0 && defensiveShare <= 1)) {
+        std::ostringstream s;
+        s << "the defensive share must be in [0, 1], got " << defensiveShare;
+        throw PbrtError(s.str());
+    }
+    try {
+        wavelength_table::Table t = wavelength_table::LoadTable(path);
+        if (defensiveShare > 0) t = wavelength_table::WithDefensiveMixture(t, defensiveShare);
+        return WavelengthSampler(TableWavelengthSampler{
+            std::make_shared<const wavelength_table::Table>(std::move(t)), defensiveShare});
+    } catch (const wavelength_table::TableError &e) {
+        // Already "FILE:LINE: reason" (or "FILE: reason" for a missing file).
+        throw PbrtError(e.what());
+    }
 }
 
 WavelengthSampler WavelengthSampler::Visible() { return WavelengthSampler(VisibleWavelengthSampler{}); }
@@ -43,6 +94,18 @@ Float WavelengthSampler::MinLambda() const {
 
 Float WavelengthSampler::MaxLambda() const {
     return std::visit([](const auto &s) { return s.MaxLambda(); }, impl);
+}
+
+bool WavelengthSampler::IsTable() const {
+    return std::holds_alternative<TableWavelengthSampler>(impl);
+}
+
+std::vector<std::pair<Float, Float>> WavelengthSampler::ZeroDensityIntervals() const {
+    std::vector<std::pair<Float, Float>> out;
+    if (const auto *t = std::get_if<TableWavelengthSampler>(&impl))
+        for (auto [a, b] : wavelength_table::ZeroMixtureIntervals(*t->table))
+            out.emplace_back(Float(a), Float(b));
+    return out;
 }
 
 }  // namespace pbrt

@@ -8,8 +8,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
+#include <utility>
 #include <variant>
+#include <vector>
+
+// patches/include/wavelength_table.h (included by wavelengths.cpp only).
+namespace wavelength_table {
+struct Table;
+}
 
 namespace pbrt {
 
@@ -66,8 +74,8 @@ inline Float InvertUniformWavelengthsSample(Float lambda, Float lmin, Float lmax
 }
 
 // ---- The samplers WavelengthSampler can be ------------------------------------------------
-// Each is a small struct with Sample / PDF / Description / range; a new kind (issue 4's
-// table-driven sampler) is one more struct and one more alternative in the variant.
+// Each is a small struct with Sample / PDF / Description / range; a new kind (such as
+// issue 4's table-driven sampler below) is one more struct and one more variant alternative.
 
 // pbrt-v4's default: four stratified wavelengths from the visible density.
 struct VisibleWavelengthSampler {
@@ -90,13 +98,29 @@ struct UniformWavelengthSampler {
     Float MaxLambda() const { return lmax; }
 };
 
+// Issue 4: four wavelengths from one u, lambda_k = F_k^-1(u) for the four densities of a
+// table (patches/include/wavelength_table.h), each carrying the mixture density
+// (1/4) sum_k p_k(lambda) the film divides by (the balance heuristic, SPEC section 1).
+struct TableWavelengthSampler {
+    std::shared_ptr<const wavelength_table::Table> table;  // already mixed with `share`
+    Float share = 0;  // defensive uniform share mixed in (0: the table as written)
+    SampledWavelengths Sample(Float u) const;
+    Float PDF(Float lambda) const;
+    std::string Description() const;
+    Float MinLambda() const;
+    Float MaxLambda() const;
+};
+
 // The seam: the renderer draws the wavelengths of every path through one of these.
 class WavelengthSampler {
   public:
     static WavelengthSampler Visible();
     // Throws PbrtError unless 0 < lmin < lmax are finite.
     static WavelengthSampler Uniform(Float lmin, Float lmax);
-    // issue 4 adds: static WavelengthSampler FromTable(...) (patches/include/wavelength_table.h)
+    // Reads a wavelength table (either layout of SPEC section 2); a bad table throws
+    // PbrtError "FILE:LINE: reason". defensiveShare in [0, 1] mixes each density with a
+    // uniform density over the table's range (the fix for zero densities, SPEC section 1).
+    static WavelengthSampler FromTable(const std::string &path, Float defensiveShare = 0);
 
     // Four wavelengths (and the per-wavelength densities the film divides by) from one u.
     SampledWavelengths Sample(Float u) const;
@@ -106,9 +130,15 @@ class WavelengthSampler {
     std::string Description() const;
     Float MinLambda() const;
     Float MaxLambda() const;
+    // Whether this samples from a table (FromTable).
+    bool IsTable() const;
+    // Stretches [a, b] nm inside [MinLambda(), MaxLambda()] where PDF is zero (a table whose
+    // four densities vanish together); empty for the built-in samplers.
+    std::vector<std::pair<Float, Float>> ZeroDensityIntervals() const;
 
   private:
-    using Impl = std::variant<VisibleWavelengthSampler, UniformWavelengthSampler>;
+    using Impl = std::variant<VisibleWavelengthSampler, UniformWavelengthSampler,
+                              TableWavelengthSampler>;
     explicit WavelengthSampler(Impl impl) : impl(std::move(impl)) {}
     Impl impl;
 };

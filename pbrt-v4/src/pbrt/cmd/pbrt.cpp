@@ -30,6 +30,12 @@ Wavelengths (four per path from one random number):
   --wavelength-sampling NAME   visible  pbrt-v4's visible sampling over 360-830 nm (default)
                                uniform  stratified uniform over --wavelength-range
   --wavelength-range LO HI     range of uniform sampling in nm (default 360 830)
+  --wavelength-pdf FILE        sample from a wavelength table (SPEC sections 1, 2: four
+                               densities on one grid, one u per path, balance heuristic);
+                               a bad table stops pbrt before rendering (FILE:LINE: reason)
+  --wavelength-pdf-defensive S mix a uniform share S in [0, 1] into each density of the
+                               table, over the table's range (e.g. 0.01): removes zero
+                               sampling density where a light emits, which biases the image
 Other:
   --quiet                      no progress bar or summary
   --help                       this text
@@ -63,6 +69,7 @@ double ParseFloat(const std::string &flag, const char *s) {
 int main(int argc, char **argv) {
     RenderOptions opts;
     std::vector<std::string> files;
+    bool hasDefensive = false, hasBuiltinSampling = false;
 
     // Flags take "--flag value" or "--flag=value".
     for (int i = 1; i < argc; ++i) {
@@ -120,12 +127,29 @@ int main(int argc, char **argv) {
             opts.lambdaMax = Float(ParseFloat(flag, argv[++i]));
             if (!(opts.lambdaMin >= 360 && opts.lambdaMax <= 830 && opts.lambdaMin < opts.lambdaMax))
                 Usage("--wavelength-range: need 360 <= LO < HI <= 830");
+        } else if (flag == "--wavelength-pdf") {
+            opts.wavelengthTable = value();
+            if (opts.wavelengthTable.empty()) Usage("--wavelength-pdf needs a file name");
+        } else if (flag == "--wavelength-pdf-defensive") {
+            hasDefensive = true;
+            opts.defensiveShare = Float(ParseFloat(flag, value()));
+            if (!(opts.defensiveShare >= 0 && opts.defensiveShare <= 1))
+                Usage("--wavelength-pdf-defensive: expected a share in [0, 1]");
         } else {
             Usage("unknown option \"" + flag + "\"");
         }
+        if (flag == "--wavelength-sampling" || flag == "--wavelength-range") hasBuiltinSampling = true;
     }
+    if (hasDefensive && opts.wavelengthTable.empty())
+        Usage("--wavelength-pdf-defensive needs --wavelength-pdf");
+    if (hasBuiltinSampling && !opts.wavelengthTable.empty())
+        Usage("--wavelength-pdf replaces --wavelength-sampling/--wavelength-range: give one or the other");
 
     try {
+        // A bad wavelength table stops pbrt before the scene is even parsed (the scene
+        // builder loads it again for the render; reading a table is cheap).
+        if (!opts.wavelengthTable.empty())
+            WavelengthSampler::FromTable(opts.wavelengthTable, opts.defensiveShare);
         std::unique_ptr<Scene> scene = LoadScene(files, opts);
         std::string outfile = opts.outfile.empty() ? scene->film->Settings().filename : opts.outfile;
         // Fail before rendering, not after, when the image cannot be written there.

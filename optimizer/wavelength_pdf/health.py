@@ -1,0 +1,150 @@
+"""Health of a table's estimator: what J cannot see (issue 2, "degenerate optima").
+
+J is blind to bias (it drops when a density gives up support where the spectrum is
+non-zero: the colour is then estimated from the rest, consistently but wrongly) and to
+rare huge errors (fireflies: J integrates a CIEDE2000 that saturates, so a tiny u-interval
+with an enormous C(u) costs almost nothing). Two figures catch both:
+
+- ``bias``: the exact relative bias of the mean of C(u), per channel. Computed in
+  wavelength space, where E[C] = sum_j integral f p_j / (sum_k p_k) dlambda: on every
+  interval between consecutive spectrum, CMF and table nodes the integrand is a quadratic
+  times a ratio of two linear functions, integrated with high-order Gauss-Legendre (exact
+  to rounding). Where the mixture is zero the integrand is zero, so a table that drops
+  support where f > 0 shows exactly the mass it lost.
+- ``std``: std(C(u)) / c per channel, from the u-quadrature of the objective.
+
+A table is accepted when its bias is at most ``MAX_BIAS`` and no channel's std is worse
+than the initialization's (within ``STD_RTOL``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import objective, sampling
+from .objective import Problem
+
+#: Largest accepted relative bias of the estimator's mean (issue 2).
+MAX_BIAS = 1e-6
+
+#: Relative tolerance when comparing a channel's std with the initialization's.
+STD_RTOL = 1e-6
+
+#: Gauss-Legendre points per node interval for the bias integral.
+_BIAS_ORDER = 8
+
+
+@dataclass(frozen=True)
+class Health:
+    """Estimator health of one table for one spectrum.
+
+    Attributes
+    ----------
+    bias : float
+        max over channels of |E[C] - c| / c.
+    bias_xyz : (3,) array
+        Signed relative bias per channel (E[C] - c) / c.
+    std : (3,) array
+        std(C(u)) / c per channel.
+    missing_mass : (3,) array
+        Fraction of each channel of c lying where the mixture density is zero.
+    """
+
+    bias: float
+    bias_xyz: np.ndarray
+    std: np.ndarray
+    missing_mass: np.ndarray
+
+    @property
+    def bias_rel(self) -> float:
+        """Alias of ``bias`` (the name used in reports)."""
+        return self.bias
+
+    @property
+    def std_rel(self) -> np.ndarray:
+        """Alias of ``std`` (the name used in reports)."""
+        return self.std
+
+    def accepted(self, reference: "Health | None" = None) -> bool:
+        """True if unbiased (<= MAX_BIAS) and, given a reference (the initialization),
+        no channel's std exceeds the reference's by more than STD_RTOL."""
+        if not (np.isfinite(self.bias) and self.bias <= MAX_BIAS):
+            return False
+        if not np.all(np.isfinite(self.std)):
+            return False
+        if reference is None:
+            return True
+        return bool(np.all(self.std <= reference.std * (1.0 + STD_RTOL)))
+
+    def reason(self, reference: "Health | None" = None) -> str:
+        """Why the table is not accepted ('' if it is)."""
+        if not (np.isfinite(self.bias) and self.bias <= MAX_BIAS):
+            return f"relative bias {self.bias:.3g} exceeds {MAX_BIAS:g}"
+        if not np.all(np.isfinite(self.std)):
+            return "std of the estimator is not finite"
+        if reference is not None:
+            worse = self.std > reference.std * (1.0 + STD_RTOL)
+            if np.any(worse):
+                ch = ",".join("XYZ"[i] for i in np.flatnonzero(worse))
+                return f"std/c worse than the initialization's in channel(s) {ch}"
+        return ""
+
+    def summary(self) -> str:
+        s = self.std
+        return f"bias={self.bias:.2e} std/c=({s[0]:.4g},{s[1]:.4g},{s[2]:.4g})"
+
+
+def _mean_in_wavelength(arr: dict, P: jax.Array, glx: jax.Array, glw: jax.Array):
+    """E[C] = sum_j integral f p_j / sum_k p_k, and integral of f where the mixture is 0."""
+    grid = arr["grid"]
+    x = arr["nodes"]
+    hi = grid[-1]
+    a, b = x[:-1], x[1:]
+    # Padding nodes lie beyond hi: their intervals get zero width.
+    b = jnp.minimum(b, hi)
+    a = jnp.minimum(a, hi)
+    h = b - a
+    lam = a[:, None] + h[:, None] * glx[None, :]
+    wt = h[:, None] * glw[None, :]
+    f = objective.f_at(arr, lam)  # (n, g, 3)
+    PN = jax.vmap(lambda p: sampling.normalize(grid, p))(P)
+    pk = jax.vmap(lambda pn: jnp.interp(lam, grid, pn))(PN)  # (4, n, g)
+    m = jnp.sum(pk, axis=0)
+    pos = m > 0
+    share = jnp.where(pos[None], pk / jnp.where(pos, m, 1.0)[None], 0.0)
+    mean = jnp.sum(jnp.sum(share, axis=0)[..., None] * f * wt[..., None], axis=(0, 1))
+    lost = jnp.sum(jnp.where(pos, 0.0, 1.0)[..., None] * f * wt[..., None], axis=(0, 1))
+    return mean, lost
+
+
+_mean_in_wavelength_jit = jax.jit(_mean_in_wavelength)
+
+
+def health(problem: Problem, P) -> Health:
+    """Bias and per-channel relative std of the table P (4, M+1) for ``problem``."""
+    P = objective._check_table(problem, P)
+    glx, glw = objective.gauss_legendre(_BIAS_ORDER)
+    mean, lost = _mean_in_wavelength_jit(problem.arrays, P, glx, glw)
+    c = problem.c
+    bias_xyz = (np.asarray(mean) - c) / c
+    _, _, m2 = objective.moments(problem, P)
+    std = np.sqrt(np.maximum(m2 - (np.asarray(mean) - c) ** 2, 0.0)) / c
+    return Health(
+        bias=float(np.max(np.abs(bias_xyz))),
+        bias_xyz=bias_xyz,
+        std=std,
+        missing_mass=np.asarray(lost) / c,
+    )
+
+
+def uniform_health(problem: Problem) -> Health:
+    """Health of stratified uniform sampling (unbiased; std from the u-quadrature)."""
+    _, m1, m2 = objective.uniform_moments(problem)
+    c = problem.c
+    b = (m1 - c) / c
+    std = np.sqrt(np.maximum(m2 - (m1 - c) ** 2, 0.0)) / c
+    return Health(bias=float(np.max(np.abs(b))), bias_xyz=b, std=std, missing_mass=np.zeros(3))

@@ -1,0 +1,537 @@
+"""Solvers that minimize J over the four densities, chosen by name from ``SOLVERS``.
+
+Every solver minimizes the same function of a parameter vector x:
+
+    J(P(x)) + mu * sum_c max(0, var_c(P(x)) / var_c(P_init) - (1 - margin))^2
+
+- P(x) is a *parameterization* (``PARAMETERIZATIONS``) of the four densities:
+  ``values`` (node values >= 0, as L-BFGS-B bounds) or ``logits`` (node values exp(x),
+  free, i.e. a softmax per density). Both mix a fixed share ``DEFENSIVE`` of the support
+  density s (the equal-mass mixture, positive at both ends of every segment where
+  f > 0) into every density: P_k = (1 - eps) v_k / |v_k| + eps s. The mixture therefore
+  never reaches zero where f > 0 (no bias), whatever the solver does; off the support the
+  densities may be exactly zero.
+- The penalty keeps every channel's variance of C(u) below the initialization's. J alone
+  is blind to rare huge values of C(u) (fireflies) and happily trades them for a lower J;
+  the health check (``health.Health.accepted``) rejects such tables, so the solvers avoid
+  them in the first place.
+
+  On a coarse level of ``multistage`` the reference is the initialization on that
+  level's grid (a coarse grid cannot follow emission lines).
+- The search runs on ``objective.simplify(problem, SEARCH_TOL)``; tables are judged on
+  the exact problem.
+
+J and its gradient with respect to the table come from one jitted value-and-grad
+(``objective.penalized_value_and_grad``, compiled once per problem size class); the
+parameterizations and the coarse levels (``Level``: every k-th table node, interpolated
+exactly to the table grid) are small jitted maps whose vector-Jacobian product is applied
+on top. SciPy and Ipopt see float64 NumPy arrays.
+
+Solvers are deterministic for the same input and seed, as long as ``max_seconds`` does not
+cut a run short (the evaluation budget is what normally stops them).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from functools import partial
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import scipy.optimize
+
+from . import health as health_mod
+from . import init as init_mod
+from . import objective
+from .objective import Problem
+from .sampling import N_DENSITIES
+
+#: Share of the support density mixed into every density (keeps the mixture positive
+#: where f > 0). 1e-3 already raises J measurably on smooth lamps; 1e-6 does not.
+DEFENSIVE = 1e-6
+
+#: The variance penalty aims this far below the initialization's variance, so that the
+#: accepted table (judged on the exact problem) keeps a margin.
+PENALTY_MARGIN = 0.05
+
+#: Default weight of the variance penalty, relative to J of the initialization.
+PENALTY_WEIGHT = 10.0
+
+#: Solvers search on ``objective.simplify(problem, SEARCH_TOL)`` (spectrum and CMFs on
+#: fewer nodes: about half the work per evaluation) and judge results on the exact
+#: problem. 0 searches on the exact problem.
+SEARCH_TOL = 1e-3
+
+#: Share of the remaining evaluations the best finalist may use on the table grid.
+FIRST_SHARE = 0.7
+
+Progress = Callable[[int, float], None]
+
+
+@dataclass
+class SolverResult:
+    """Outcome of one solver run.
+
+    Attributes
+    ----------
+    P : (4, M+1) array
+        The best table found, every row normalized (the table that is written).
+    J : float
+        J of ``P`` at the optimizer's resolution.
+    history : list of float
+        Best J so far after every evaluation.
+    nfev : int
+        Number of value-and-gradient evaluations.
+    message : str
+        What stopped the solver, and which stage or start won.
+    """
+
+    P: np.ndarray
+    J: float
+    history: list[float] = field(default_factory=list)
+    nfev: int = 0
+    message: str = ""
+
+
+class _OutOfBudget(Exception):
+    """Raised inside an objective call when the evaluation or time budget is spent."""
+
+
+# --- Parameterizations ---------------------------------------------------------------
+
+
+def _mix(v, s, dg):
+    """(1 - eps) v / |v| + eps s, |v| by the trapezoid rule; v = 0 gives s."""
+    total = jnp.sum(0.5 * (v[:, 1:] + v[:, :-1]) * dg[None, :], axis=1)
+    pos = total > 0
+    vn = jnp.where(pos[:, None], v / jnp.where(pos, total, 1.0)[:, None], s[None, :])
+    return (1.0 - DEFENSIVE) * vn + DEFENSIVE * s[None, :]
+
+
+def _values_to_P(x, E, s, mask, dg):
+    v = x.reshape(N_DENSITIES, -1) * mask[None, :]
+    return _mix(v @ E.T, s, dg)
+
+
+def _logits_to_P(x, E, s, mask, dg):
+    th = x.reshape(N_DENSITIES, -1)
+    th = jnp.where(mask[None, :], th, -jnp.inf)
+    v = jnp.exp(th - jnp.max(th, axis=1, keepdims=True))
+    return _mix(v @ E.T, s, dg)
+
+
+def _values_from_V(V, mask):
+    return (np.maximum(V, 0.0) * mask[None, :]).ravel()
+
+
+def _logits_from_V(V, mask, floor=1e-9):
+    v = np.maximum(V, 0.0)
+    v = np.maximum(v, floor * np.max(v, axis=1, keepdims=True))
+    return np.where(mask[None, :], np.log(v), 0.0).ravel()
+
+
+@dataclass(frozen=True)
+class Parameterization:
+    """A map from a flat parameter vector to a table, its inverse, and whether it is
+    bounded (v >= 0) or free.
+
+    ``to_P(x, E, s, mask, dg)``: node values v on a level grid (from x), interpolated to
+    the table grid by E, normalized and mixed with the support density s.
+    ``from_V(V, mask)``: parameters whose node values are V (rows of any scale).
+    """
+
+    name: str
+    to_P: Callable
+    from_V: Callable
+    bounded: bool
+
+
+PARAMETERIZATIONS = {
+    "values": Parameterization("values", _values_to_P, _values_from_V, True),
+    "logits": Parameterization("logits", _logits_to_P, _logits_from_V, False),
+}
+
+
+@partial(jax.jit, static_argnames=("name",))
+def _to_P(x, E, s, mask, dg, name):
+    return PARAMETERIZATIONS[name].to_P(x, E, s, mask, dg)
+
+
+@partial(jax.jit, static_argnames=("name",))
+def _to_V(x, E, s, mask, dg, name):
+    """Node values on the level grid (normalization aside) of parameters x."""
+    if name == "values":
+        return x.reshape(N_DENSITIES, -1) * mask[None, :]
+    th = jnp.where(mask[None, :], x.reshape(N_DENSITIES, -1), -jnp.inf)
+    return jnp.exp(th - jnp.max(th, axis=1, keepdims=True))
+
+
+@partial(jax.jit, static_argnames=("name",))
+def _pull_back(x, E, s, mask, dg, gP, name):
+    _, vjp = jax.vjp(lambda y: PARAMETERIZATIONS[name].to_P(y, E, s, mask, dg), x)
+    return vjp(gP)[0]
+
+
+# --- Levels: coarser grids embedded in the table grid ---------------------------------
+
+
+@dataclass(frozen=True)
+class Level:
+    """A grid made of every ``stride``-th table node (and the last one).
+
+    A piecewise-linear function on it is also one on the table grid (E interpolates it
+    exactly), so a coarse level is just a parameterization of fewer unknowns: it shares
+    the compiled objective, smooths the landscape and converges in fewer iterations.
+    """
+
+    stride: int
+    grid: np.ndarray
+    E: np.ndarray  # (M+1, L) interpolation from level nodes to table nodes
+    mask: np.ndarray  # (L,) level nodes whose hat meets the support
+
+
+def make_level(table_grid: np.ndarray, support: np.ndarray, stride: int) -> Level:
+    idx = np.arange(0, table_grid.size, stride)
+    if idx[-1] != table_grid.size - 1:
+        idx = np.append(idx, table_grid.size - 1)
+    g = table_grid[idx]
+    E = np.zeros((table_grid.size, g.size))
+    for j in range(g.size):
+        e = np.zeros(g.size)
+        e[j] = 1.0
+        E[:, j] = np.interp(table_grid, g, e)
+    mask = (E.T @ support.astype(float)) > 0
+    return Level(stride=stride, grid=g, E=E, mask=mask)
+
+
+# --- Shared state of one optimization ------------------------------------------------
+
+
+class _Context:
+    """Problem data, the penalty reference, the budget and the best point seen."""
+
+    def __init__(self, problem: Problem, P_init: np.ndarray, progress: Progress | None,
+                 max_evals: int, max_seconds: float | None, penalty_weight: float = PENALTY_WEIGHT,
+                 search_tol: float | None = None):
+        self.problem = problem
+        self.search = objective.simplify(problem, SEARCH_TOL if search_tol is None else search_tol)
+        self.arr = self.search.arrays
+        self.glx, self.glw = objective.gauss_legendre(objective.ORDER)
+        s = init_mod.support_density(problem)
+        self.s = jnp.asarray(s)
+        self.support = s > 0
+        self.dg = jnp.asarray(np.diff(problem.grid))
+        self.health_init = health_mod.health(problem, P_init)
+        # The penalty compares variances on the search problem, the acceptance on the
+        # exact one (``health_init``).
+        self.var_ref = self._variance(P_init)
+        self._var_refs: dict[int, jax.Array] = {1: self.var_ref}
+        self.J_init = objective.J(self.search, P_init)
+        self.mu = float(penalty_weight * max(self.J_init, 1e-3))
+        self.progress = progress
+        self.max_evals = max_evals
+        self.deadline = None if max_seconds is None else time.monotonic() + max_seconds
+        self.nfev = 0
+        self.history: list[float] = []
+        self.best_J = np.inf
+        self.fine = make_level(problem.grid, self.support, 1)
+        self._jlevels: dict[int, tuple] = {}
+
+    def _variance(self, P: np.ndarray) -> jax.Array:
+        _, m1, m2 = objective.moments(self.search, P, objective.ORDER)
+        c = self.search.c
+        var = np.maximum(m2 - (m1 - c) ** 2, 0.0)
+        return jnp.asarray(np.maximum(var, 1e-24 * c**2 + 1e-300))
+
+    def level(self, stride: int) -> Level:
+        return self.fine if stride == 1 else make_level(self.problem.grid, self.support, stride)
+
+    def var_ref_for(self, level: Level) -> jax.Array:
+        """The variance a level is held to: the initialization's on that level's grid (a
+        coarse grid cannot follow lines, so the table grid's would be out of reach)."""
+        if level.stride not in self._var_refs:
+            V = init_mod.equal_mass_partition(self.problem, level.grid)
+            self._var_refs[level.stride] = self._variance(self.table(
+                PARAMETERIZATIONS["values"].from_V(V, level.mask), level, "values"))
+        return self._var_refs[level.stride]
+
+    def _j(self, level: Level):
+        key = level.stride
+        if key not in self._jlevels:
+            self._jlevels[key] = (jnp.asarray(level.E), jnp.asarray(level.mask))
+        return self._jlevels[key]
+
+    def out_of_budget(self) -> bool:
+        if self.nfev >= self.max_evals:
+            return True
+        return self.deadline is not None and time.monotonic() > self.deadline
+
+    def table(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
+        E, mask = self._j(level)
+        return np.asarray(_to_P(jnp.asarray(x), E, self.s, mask, self.dg, name))
+
+    def values(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
+        E, mask = self._j(level)
+        return np.asarray(_to_V(jnp.asarray(x), E, self.s, mask, self.dg, name))
+
+    def bounds(self, level: Level, name: str):
+        if not PARAMETERIZATIONS[name].bounded:
+            return None
+        ub = np.where(np.tile(level.mask, N_DENSITIES), np.inf, 0.0)
+        return scipy.optimize.Bounds(np.zeros_like(ub), ub)
+
+    def evaluate(self, P: jax.Array, var_ref: jax.Array | None = None) -> tuple[float, float, jax.Array]:
+        var_ref = self.var_ref if var_ref is None else var_ref
+        (val, (J, _, _)), gP = objective.penalized_value_and_grad(
+            P, self.arr, self.glx, self.glw, var_ref, self.mu, PENALTY_MARGIN)
+        return float(val), float(J), gP
+
+    def fun(self, level: Level, name: str, tracker: "_Tracker"):
+        """The scalar objective with gradient for SciPy/Ipopt in parameterization ``name``
+        on ``level`` (variance penalty against ``var_ref_for(level)``)."""
+        var_ref = self.var_ref_for(level)
+        E, mask = self._j(level)
+
+        def f(x: np.ndarray):
+            if self.out_of_budget():
+                raise _OutOfBudget
+            xj = jnp.asarray(x, dtype=jnp.float64)
+            P = _to_P(xj, E, self.s, mask, self.dg, name)
+            val, J, gP = self.evaluate(P, var_ref)
+            g = np.asarray(_pull_back(xj, E, self.s, mask, self.dg, gP, name), dtype=np.float64)
+            self.nfev += 1
+            if not np.isfinite(val) or not np.all(np.isfinite(g)):
+                # A step into a region the objective cannot evaluate: make it unattractive.
+                return 1e300, np.zeros_like(g)
+            tracker.offer(x, val, J)
+            self.best_J = min(self.best_J, J)
+            self.history.append(self.best_J)
+            if self.progress is not None:
+                self.progress(self.nfev, self.best_J)
+            return val, g
+
+        return f
+
+
+class _Tracker:
+    """Best point of one run (by penalized value)."""
+
+    def __init__(self):
+        self.x = None
+        self.val = np.inf
+        self.J = np.inf
+
+    def offer(self, x, val, J):
+        if val < self.val:
+            self.x, self.val, self.J = np.array(x, copy=True), val, J
+
+
+@dataclass
+class _Point:
+    """A candidate: node values on a level grid, its penalized value and J."""
+
+    V: np.ndarray
+    level: Level
+    val: float = np.inf
+    J: float = np.inf
+    name: str = ""
+
+    def on(self, level: Level) -> np.ndarray:
+        """Node values on another (finer) level: exact interpolation."""
+        if level.stride == self.level.stride:
+            return self.V
+        return np.stack([np.interp(level.grid, self.level.grid, v) for v in self.V])
+
+
+def _run_scipy(ctx: _Context, start: _Point, level: Level, name: str, method: str, maxiter: int) -> _Point:
+    """One SciPy run from ``start`` on ``level`` in parameterization ``name``."""
+    V0 = start.on(level)
+    x0 = PARAMETERIZATIONS[name].from_V(V0, level.mask)
+    tracker = _Tracker()
+    f = ctx.fun(level, name, tracker)
+    try:
+        if method == "L-BFGS-B":
+            scipy.optimize.minimize(
+                f, x0, jac=True, method="L-BFGS-B", bounds=ctx.bounds(level, name),
+                options={"maxiter": maxiter, "maxfun": 2 * maxiter, "maxcor": 20, "ftol": 1e-12, "gtol": 1e-10},
+            )
+        else:
+            scipy.optimize.minimize(
+                f, x0, jac=True, method="trust-constr", bounds=ctx.bounds(level, name),
+                hess=scipy.optimize.BFGS(), options={"maxiter": maxiter, "gtol": 1e-10, "xtol": 1e-12},
+            )
+    except _OutOfBudget:
+        pass
+    if tracker.x is None:
+        return _Point(V=V0, level=level, val=start.val, J=start.J, name=start.name)
+    return _Point(V=ctx.values(tracker.x, level, name), level=level, val=tracker.val, J=tracker.J,
+                  name=start.name)
+
+
+def _start(ctx: _Context, P: np.ndarray, name: str = "") -> _Point:
+    return _Point(V=np.asarray(P, dtype=np.float64), level=ctx.fine, name=name)
+
+
+def _table_of(ctx: _Context, pt: _Point) -> np.ndarray:
+    """The table (4, M+1) of a candidate, as the solvers evaluate it."""
+    x = PARAMETERIZATIONS["values"].from_V(pt.V, pt.level.mask)
+    return ctx.table(x, pt.level, "values")
+
+
+# --- Solvers -------------------------------------------------------------------------
+
+
+def _finish(ctx: _Context, P: np.ndarray, message: str) -> SolverResult:
+    return SolverResult(P=P, J=objective.J(ctx.problem, P), history=list(ctx.history),
+                        nfev=ctx.nfev, message=message)
+
+
+def lbfgsb(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
+           max_seconds: float | None = None, max_evals: int = 900, parameterization: str = "logits") -> SolverResult:
+    """SciPy L-BFGS-B from the initialization on the table grid, in one parameterization
+    (``logits``: unconstrained softmax; ``values``: bounds v >= 0)."""
+    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
+    pt = _run_scipy(ctx, _start(ctx, P0), ctx.fine, parameterization, "L-BFGS-B", max_evals)
+    return _finish(ctx, _table_of(ctx, pt), f"lbfgsb/{parameterization}: {ctx.nfev} evaluations")
+
+
+def trust_constr(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
+                 max_seconds: float | None = None, max_evals: int = 400) -> SolverResult:
+    """SciPy trust-constr (trust-region SQP with a BFGS Hessian) in the logits
+    parameterization, which needs no bounds (its interior-point mode for the bounds of
+    the values parameterization barely moves within a practical budget)."""
+    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
+    pt = _run_scipy(ctx, _start(ctx, P0), ctx.fine, "logits", "trust-constr", max_evals)
+    return _finish(ctx, _table_of(ctx, pt), f"trust-constr: {ctx.nfev} evaluations")
+
+
+def ipopt(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
+          max_seconds: float | None = None, max_evals: int = 900) -> SolverResult:
+    """Ipopt (cyipopt, MUMPS linear solver, limited-memory Hessian) with bounds v >= 0."""
+    import cyipopt
+
+    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
+    level = ctx.fine
+    x0 = PARAMETERIZATIONS["values"].from_V(np.asarray(P0), level.mask)
+    tracker = _Tracker()
+    f = ctx.fun(level, "values", tracker)
+    ub = np.where(np.tile(level.mask, N_DENSITIES), 1e19, 0.0)
+    message = ""
+    try:
+        res = cyipopt.minimize_ipopt(
+            f, x0, jac=True, bounds=list(zip(np.zeros_like(ub), ub)),
+            options={"max_iter": max_evals, "hessian_approximation": "limited-memory",
+                     "linear_solver": "mumps", "print_level": 0, "sb": "yes", "tol": 1e-10},
+        )
+        message = str(res.message)
+    except _OutOfBudget:
+        message = "evaluation budget spent"
+    P = np.asarray(P0) if tracker.x is None else ctx.table(tracker.x, level, "values")
+    return _finish(ctx, P, f"ipopt: {message}")
+
+
+def multistage(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
+               max_seconds: float | None = None, max_evals: int = 1500, strides: tuple[int, ...] = (4, 2, 1),
+               screen_iters: int = 60, n_random: int = 2, n_keep: int = 2, coarse_iters: int = 150,
+               stage_iters: int = 100) -> SolverResult:
+    """Multi-start, multi-level, multi-parameterization L-BFGS-B; keeps the best accepted.
+
+    1. Screen on the coarsest level (every ``strides[0]``-th table node): a short run in
+       the logits (softmax) parameterization from each starting point of
+       ``init.starting_points`` (the equal-mass partition first).
+    2. Carry the ``n_keep`` best through the finer levels (logits, ``coarse_iters``
+       each); a coarse table is exactly representable on a finer grid.
+    3. On the table grid, share the remaining budget among them: alternate runs in the
+       bounded values and the logits parameterization until a round gains less than 0.1 %.
+       Logits move mass smoothly and cannot reach zero; bounded values can put exact zeros
+       and lift them again.
+    4. Return the lowest-J table among them that the health check accepts (unbiased, no
+       channel's std above the initialization's); the initialization itself if none is.
+    """
+    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
+    levels = [ctx.level(k) for k in strides if k >= 1 and (k == 1 or problem.grid.size > 4 * k)]
+    if not levels or levels[-1].stride != 1:
+        levels.append(ctx.fine)
+    coarse = levels[0]
+    starts = init_mod.starting_points(problem, seed=seed, n_random=n_random, grid=coarse.grid)
+    # Small budgets shrink the screening and the intermediate levels so that at least
+    # half of the evaluations are left for the table grid (L-BFGS-B uses ~1.2
+    # evaluations per iteration).
+    screen_iters = max(3, min(screen_iters, int(0.3 * max_evals / (1.2 * len(starts)))))
+    n_mid = max(len(levels) - 2, 1) * n_keep
+    coarse_iters = max(3, min(coarse_iters, int(0.2 * max_evals / (1.2 * n_mid))))
+    screened = []
+    for name, V in starts.items():
+        if ctx.out_of_budget():
+            break
+        pt = _run_scipy(ctx, _Point(V=V, level=coarse, name=name), coarse, "logits", "L-BFGS-B", screen_iters)
+        screened.append(pt)
+    screened.sort(key=lambda p: p.val)
+    kept = screened[:n_keep]
+    for level in levels[1:-1]:
+        kept = [_run_scipy(ctx, pt, level, "logits", "L-BFGS-B", coarse_iters) for pt in kept]
+        kept.sort(key=lambda p: p.val)
+    fine = levels[-1]
+    finalists = []
+    for rank, pt in enumerate(kept):
+        # The most promising candidate may use most of what is left; a stalled one
+        # leaves the rest to the next.
+        left = ctx.max_evals - ctx.nfev
+        share = left if rank == len(kept) - 1 else int(left * FIRST_SHARE)
+        finalists.append(_alternate(ctx, pt, fine, ctx.nfev + share, stage_iters))
+    return _best_accepted(ctx, finalists, P0, "multistage")
+
+
+def _alternate(ctx: _Context, pt: _Point, level: Level, stop_at: int, stage_iters: int) -> tuple[_Point, int]:
+    """Alternate bounded-values and logits L-BFGS-B runs on ``level`` until a round gains
+    less than 0.1 % or ``stop_at`` evaluations are reached; returns (best, rounds)."""
+    rounds = 0
+    while not ctx.out_of_budget() and ctx.nfev < stop_at:
+        before = pt.val
+        for pname in ("values", "logits"):
+            if ctx.out_of_budget() or ctx.nfev >= stop_at:
+                break
+            new = _run_scipy(ctx, pt, level, pname, "L-BFGS-B", min(stage_iters, stop_at - ctx.nfev))
+            if new.val <= pt.val:
+                pt = new
+        rounds += 1
+        if pt.val > before * (1.0 - 1e-3):
+            break
+    return pt, rounds
+
+
+def _best_accepted(ctx: _Context, finalists: list, P0: np.ndarray, who: str) -> SolverResult:
+    """The lowest-value finalist whose table passes the health check, else P0."""
+    finalists = sorted(finalists, key=lambda t: t[0].val)
+    for pt, rounds in finalists:
+        P = _table_of(ctx, pt)
+        if health_mod.health(ctx.problem, P).accepted(ctx.health_init):
+            return _finish(ctx, P, f"{who}: best start '{pt.name}' after {rounds} round(s), "
+                                   f"{ctx.nfev} evaluations")
+    return _finish(ctx, np.asarray(P0), f"{who}: no optimized table passed the health check; "
+                   "returning the initialization")
+
+
+def polish(problem: Problem, P_start: np.ndarray, P0: np.ndarray, *, progress: Progress | None = None,
+           max_seconds: float | None = None, max_evals: int = 600, stage_iters: int = 100) -> SolverResult:
+    """Continue from the table ``P_start`` on the problem's grid (e.g. a solution from a
+    coarser grid, interpolated): the table-grid stage of ``multistage`` alone. ``P0`` is
+    the initialization the health check compares with."""
+    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
+    start = _Point(V=np.asarray(P_start, dtype=np.float64), level=ctx.fine, name="previous")
+    return _best_accepted(ctx, [_alternate(ctx, start, ctx.fine, max_evals, stage_iters)], P0, "polish")
+
+
+#: Solvers by name (``--solver`` on the command line).
+SOLVERS: dict[str, Callable[..., SolverResult]] = {
+    "multistage": multistage,
+    "lbfgsb": lbfgsb,
+    "trust-constr": trust_constr,
+    "ipopt": ipopt,
+}
+
+#: The solver used when none is named.
+DEFAULT_SOLVER = "multistage"

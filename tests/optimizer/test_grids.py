@@ -1,0 +1,50 @@
+"""Adaptive table grids for line lamps."""
+
+import numpy as np
+
+import wavelength_pdf  # noqa: F401  (enables float64)
+from wavelength_pdf import grids, objective
+from wavelength_pdf.spectra import Spectrum
+
+WL = np.arange(380.0, 781.0, 0.5)
+
+
+def _lines():
+    val = 0.02 + sum(np.exp(-0.5 * ((WL - c) / 0.8) ** 2) for c in (436.0, 546.0, 611.0))
+    return Spectrum("lines", "test:lines", WL, val)
+
+
+def _smooth():
+    return Spectrum("smooth", "test:smooth", WL, 1.0 + 0.5 * np.sin(WL / 40.0))
+
+
+def test_line_lamps_are_told_apart_from_smooth_spectra():
+    lines = objective.make_problem(_lines())
+    smooth = objective.make_problem(_smooth())
+    assert grids.is_spiky(lines) and not grids.is_spiky(smooth)
+    assert grids.interpolation_error(smooth, objective.DEFAULT_GRID) < 0.01
+
+
+def test_refine_adds_nodes_around_the_lines_only():
+    p = objective.make_problem(_lines())
+    base = objective.DEFAULT_GRID
+    g = grids.refine(p, base, 161, 1.25)
+    assert g.size == 161
+    assert np.all(np.isin(base, g))  # a table on the base grid is representable exactly
+    assert np.min(np.diff(g)) >= 1.25 - 1e-9
+    # The lines get the finest steps first.
+    for c in (436.0, 546.0, 611.0):
+        near = (g[:-1] >= c - 3.0) & (g[1:] <= c + 3.0)
+        assert np.all(np.diff(g)[near] == 1.25), c
+    # Where the lamp is a flat continuum, the default 5 nm steps stay.
+    far = (g[:-1] >= 660.0) & (g[1:] <= 780.0)
+    assert np.all(np.diff(g)[far] >= 2.5)
+    assert grids.interpolation_error(p, g) < 0.3 * grids.interpolation_error(p, base)
+    # Errors of a grid's segments add up to its total error.
+    assert np.sum(grids.segment_errors(p, g)) == grids.interpolation_error(p, g)
+
+
+def test_refine_stops_at_the_smallest_step():
+    p = objective.make_problem(_lines())
+    g = grids.refine(p, np.array([430.0, 440.0]), 1000, 2.5)
+    assert g.size < 1000 and np.min(np.diff(g)) >= 2.5 - 1e-9
