@@ -62,8 +62,22 @@ class BadInput(Exception):
 # Helpers shared by the subcommands
 # --------------------------------------------------------------------------------------
 
-def make_grid(lo: float, hi: float, step: float) -> np.ndarray:
-    """Table grid ``lo, lo+step, ..., hi`` (nm); ``hi - lo`` must be a multiple of ``step``."""
+def make_grid(lo: float, hi: float, step: float | str) -> np.ndarray | str:
+    """Table grid ``lo, lo+step, ..., hi`` (nm); ``hi - lo`` must be a multiple of ``step``.
+
+    ``step == "auto"`` returns "auto": the optimizer's own grid (5 nm, refined around
+    emission lines; :mod:`wavelength_pdf.grids`), available on the default range only."""
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise BadInput(f"--range must be two finite wavelengths LO < HI, got {lo:g} {hi:g}")
+    if step == "auto":
+        if (lo, hi) != (380.0, 780.0):
+            raise BadInput("--grid-step auto works on the default range 380-780 nm only; "
+                           "give a step in nm for another range")
+        return "auto"
+    try:
+        step = float(step)
+    except ValueError:
+        raise BadInput(f"--grid-step must be a number of nm or 'auto', got {step!r}") from None
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise BadInput(f"--range must be two finite wavelengths LO < HI, got {lo:g} {hi:g}")
     if not (math.isfinite(step) and step > 0):
@@ -414,7 +428,7 @@ def _batch_job(job: dict[str, Any]) -> dict[str, Any]:
         sp = load_spectra(spec, lo=lo, hi=hi)
         if len(sp) != 1:
             raise SpectrumError(f"{spec}: expected one spectrum, got {len(sp)}")
-        o = optimize_one(sp[0], out, np.asarray(job["grid"]), job["solver"], job["seed"],
+        o = optimize_one(sp[0], out, job["grid"] if isinstance(job["grid"], str) else np.asarray(job["grid"]), job["solver"], job["seed"],
                          job["max_seconds"], None)
         status = "written" if o.written else "not accepted"
         msg = "" if o.written else str(result_health(o.result).get("reason")
@@ -480,7 +494,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
                 continue
             except TableError:
                 pass  # unreadable: redo it
-        todo.append({"spec": spec, "out": str(out), "range": (lo, hi), "grid": grid.tolist(),
+        todo.append({"spec": spec, "out": str(out), "range": (lo, hi), "grid": grid if isinstance(grid, str) else grid.tolist(),
                      "solver": args.solver, "seed": args.seed, "max_seconds": args.max_seconds})
 
     jobs = max(1, args.jobs or 1)
@@ -615,9 +629,10 @@ def _range_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--range", nargs=2, type=float, metavar=("LO", "HI"),
                         default=(380.0, 780.0),
                         help="wavelength range of the table, nm (default: 380 780)")
-    parser.add_argument("--grid-step", type=float, default=5.0, metavar="NM",
-                        help="spacing of the table's nodes, nm; must divide the range "
-                             "(default: 5, i.e. 81 nodes over 380-780)")
+    parser.add_argument("--grid-step", default="auto", metavar="NM",
+                        help="spacing of the table's nodes, nm, which must divide the range; "
+                             "or 'auto' (default): 5 nm over 380-780, refined around the lines "
+                             "of a line lamp where that lowers J")
 
 
 def _default_solver() -> str:

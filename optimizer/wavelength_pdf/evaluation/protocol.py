@@ -71,7 +71,7 @@ class Evaluation:
     error_maps: dict[tuple[str, int], np.ndarray] = field(default_factory=dict)
 
 
-def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: float = 5.0) -> Path:
+def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: float | str = "auto") -> Path:
     """The spectrum's optimized table at ``path``, optimized only when it is not there yet."""
     if path.is_file():
         read_table(path)  # a damaged cache is an error, not silently reused
