@@ -108,7 +108,8 @@ def run_one(spec: str, args_dict: dict) -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sp = load_spectrum(spec)
-    grid = np.arange(380.0, 780.0 + 1e-9, args_dict["grid_step"])
+    step = args_dict["grid_step"]
+    grid = "auto" if step == "auto" else np.arange(380.0, 780.0 + 1e-9, float(step))
     kwargs = {"grid": grid, "seed": args_dict["seed"], "max_seconds": args_dict["max_seconds"]}
     if args_dict["solver"]:
         kwargs["solver"] = args_dict["solver"]
@@ -123,7 +124,7 @@ def run_one(spec: str, args_dict: dict) -> dict:
         "J": float(_field(res, "J")), "J_fine": float(_field(res, "J_fine")),
         "bias_rel": float(_field(health, "bias_rel", np.nan)),
         "std_rel": "/".join(f"{v:.3g}" for v in std),
-        "accepted": bool(_field(health, "accepted", False)),
+        "accepted": bool(_field(res, "accepted", False)),  # Result.accepted (Health.accepted is a method)
         "solver": str(_field(res, "solver")), "seconds": float(_field(res, "seconds", wall)),
         "cpu_seconds": cpu,
         "message": str(_field(res, "message", "")), "reference": "", "J_reference": "",
@@ -141,7 +142,7 @@ def run_one(spec: str, args_dict: dict) -> dict:
         out = Path(args_dict["tables"])
         out.mkdir(parents=True, exist_ok=True)
         t = _field(res, "table")
-        t = t if isinstance(t, Table) else Table(grid, np.asarray(t))
+        t = t if isinstance(t, Table) else Table(np.asarray(grid), np.asarray(t))
         name = Path(spec).stem if ":" not in spec else spec.replace(":", "-")
         write_table(out / f"{name}.csv", Table(t.grid, t.pdfs, [f"name: {sp.name}",
                                                                  f"source: {spec}",
@@ -187,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
                                               "HP1-5 + the cornell-box lamp)")
     p.add_argument("--solver", default=None, help="solver name (default: the package default)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--grid-step", type=float, default=5.0, help="table grid step, nm (default 5)")
+    p.add_argument("--grid-step", default="auto",
+                   help="table grid step in nm, or 'auto' (default: the optimizer's line-refined grid)")
     p.add_argument("--max-seconds", type=float, default=None, help="time budget per spectrum")
     p.add_argument("--jobs", type=int, default=1, help="spectra at once, one core each")
     p.add_argument("--csv", default=None, help="also write the rows to this CSV file")
