@@ -1,3 +1,4 @@
+#include <pbrt/test_tempdir.h>
 #include <pbrt/image.h>
 
 #include <gtest/gtest.h>
@@ -15,17 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A fresh directory under the system temp directory, removed at the end of the test.
-class TempDir {
-  public:
-    TempDir() {
-        std::string tmpl = (fs::temp_directory_path() / "pbrt-image-XXXXXX").string();
-        path = mkdtemp(tmpl.data());
-    }
-    ~TempDir() { fs::remove_all(path); }
-    std::string File(const std::string &name) const { return (fs::path(path) / name).string(); }
-    std::string path;
-};
+using pbrt::testing_util::TempDir;
 
 Image RandomImage(int w, int h, int c, float lo, float hi, unsigned seed) {
     std::mt19937 rng(seed);

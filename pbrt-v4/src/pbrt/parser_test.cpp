@@ -1,3 +1,4 @@
+#include <pbrt/test_tempdir.h>
 #include <pbrt/parser.h>
 
 #include <gtest/gtest.h>
@@ -163,22 +164,7 @@ std::string ParseError(const std::string &text, const std::string &name = "bad.p
     return "";
 }
 
-// A fresh directory under the system temp directory, removed at the end of the test.
-class TempDir {
-  public:
-    TempDir() {
-        std::string tmpl = (fs::temp_directory_path() / "pbrt-parser-XXXXXX").string();
-        path = mkdtemp(tmpl.data());
-    }
-    ~TempDir() { fs::remove_all(path); }
-    std::string Write(const std::string &rel, const std::string &text) const {
-        fs::path p = fs::path(path) / rel;
-        fs::create_directories(p.parent_path());
-        std::ofstream(p, std::ios::binary) << text;
-        return p.string();
-    }
-    std::string path;
-};
+using pbrt::testing_util::TempDir;
 
 }  // namespace
 

@@ -1,3 +1,4 @@
+#include <pbrt/test_tempdir.h>
 #include <pbrt/ply.h>
 
 #include <gtest/gtest.h>
@@ -15,21 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A fresh directory under the system temp directory, removed at the end of the test.
-class TempDir {
-  public:
-    TempDir() {
-        std::string tmpl = (fs::temp_directory_path() / "pbrt-ply-XXXXXX").string();
-        path = mkdtemp(tmpl.data());
-    }
-    ~TempDir() { fs::remove_all(path); }
-    std::string Write(const std::string &name, const std::string &bytes) const {
-        std::string p = (fs::path(path) / name).string();
-        std::ofstream(p, std::ios::binary) << bytes;
-        return p;
-    }
-    std::string path;
-};
+using pbrt::testing_util::TempDir;
 
 // A small PLY writer for the tests: each property is (type, name); each row holds the values
 // of one element entry, lists written as their count followed by the items.

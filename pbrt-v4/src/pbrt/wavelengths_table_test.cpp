@@ -7,6 +7,7 @@
 // scale * sum_lambda cmf * rho * L / photometric(L). Tolerances come from the noise measured
 // across pixels (which all share that expectation), and each test also checks that the
 // noise is small enough to see a 2% bias, so that it can fail.
+#include <pbrt/test_tempdir.h>
 #include <pbrt/test_util.h>
 #include <pbrt/wavelength_coverage.h>
 #include <pbrt/wavelengths.h>
@@ -29,10 +30,15 @@ using namespace pbrt::testing_util;
 
 namespace {
 
+// One directory per test process: fixed names in a shared temp folder collide when two
+// test runs (two build folders, CI beside a developer) overlap.
+const TempDir &TestDir() {
+    static TempDir dir;
+    return dir;
+}
+
 std::string WriteTemp(const std::string &name, const std::string &text) {
-    std::string path = ::testing::TempDir() + "pbrt_wt_" + name;
-    std::ofstream(path) << text;
-    return path;
+    return TestDir().Write("pbrt_wt_" + name, text);
 }
 
 // A CSV table on 380..780 nm (5 nm) with densities from a function of (k, lambda).
@@ -242,7 +248,7 @@ TEST(TableWavelengths, BadTablesThrowWithFileLineAndReason) {
             }
         }
     }
-    std::string missing = ::testing::TempDir() + "pbrt_wt_missing.csv";
+    std::string missing = TestDir().File("pbrt_wt_missing.csv");
     std::remove(missing.c_str());
     try {
         WavelengthSampler::FromTable(missing);
