@@ -23,18 +23,18 @@ import argparse
 import csv
 import math
 import os
-import re
 import sys
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from wavelength_pdf import __version__
 from wavelength_pdf.spectra import Spectrum, SpectrumError, load_spectra
-from wavelength_pdf.table import Table, TableError, read_table, write_table
+from wavelength_pdf.produce import (field_of, format_value, make_grid, optimize_one, read_header, result_health,
+                                    safe_name, summary_line)
+from wavelength_pdf.table import TableError, read_table
 
 PROG = "wavelength-pdf"
 
@@ -62,33 +62,6 @@ class BadInput(Exception):
 # Helpers shared by the subcommands
 # --------------------------------------------------------------------------------------
 
-def make_grid(lo: float, hi: float, step: float | str) -> np.ndarray | str:
-    """Table grid ``lo, lo+step, ..., hi`` (nm); ``hi - lo`` must be a multiple of ``step``.
-
-    ``step == "auto"`` returns "auto": the optimizer's own grid (5 nm, refined around
-    emission lines; :mod:`wavelength_pdf.grids`), available on the default range only."""
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise BadInput(f"--range must be two finite wavelengths LO < HI, got {lo:g} {hi:g}")
-    if step == "auto":
-        if (lo, hi) != (380.0, 780.0):
-            raise BadInput("--grid-step auto works on the default range 380-780 nm only; "
-                           "give a step in nm for another range")
-        return "auto"
-    try:
-        step = float(step)
-    except ValueError:
-        raise BadInput(f"--grid-step must be a number of nm or 'auto', got {step!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise BadInput(f"--range must be two finite wavelengths LO < HI, got {lo:g} {hi:g}")
-    if not (math.isfinite(step) and step > 0):
-        raise BadInput(f"--grid-step must be positive, got {step:g}")
-    n = (hi - lo) / step
-    m = int(round(n))
-    if m < 1 or abs(n - m) > 1e-9 * max(1.0, n):
-        raise BadInput(f"--grid-step {step:g} nm does not divide the range {lo:g}-{hi:g} nm")
-    return np.linspace(lo, hi, m + 1)
-
-
 def solver_names() -> list[str]:
     """Names in the solver registry (empty if the registry cannot be imported)."""
     try:
@@ -96,128 +69,6 @@ def solver_names() -> list[str]:
     except Exception:  # the registry is optional for --help; optimize reports the error
         return []
     return list(SOLVERS)
-
-
-def _get(obj: Any, name: str, default: Any = None) -> Any:
-    """Attribute or mapping key ``name`` of ``obj``."""
-    if isinstance(obj, dict):
-        return obj.get(name, default)
-    return getattr(obj, name, default)
-
-
-def _fmt(x: Any) -> str:
-    """A number for headers and summaries: full precision for floats, else str()."""
-    if isinstance(x, (float, np.floating)):
-        return repr(float(x))
-    if isinstance(x, (np.ndarray, list, tuple)):
-        return "[" + ", ".join(_fmt(v) for v in np.asarray(x, dtype=float).ravel()) + "]"
-    return str(x)
-
-
-def health_fields(health: Any, reference: Any = None) -> dict[str, Any]:
-    """bias_rel, std_rel (3,), accepted and reason of a health report.
-
-    Reads :class:`wavelength_pdf.health.Health` (``bias``, ``std``, and ``accepted`` /
-    ``reason`` methods judged against the initialization's health ``reference``) as well
-    as plain records with ``bias_rel``, ``std_rel``, ``accepted`` and ``reason`` values.
-    """
-    if health is None:
-        return {}
-
-    def value(*names: str) -> Any:
-        for n in names:
-            v = _get(health, n)
-            if v is not None:
-                return v(reference) if callable(v) else v
-        return None
-
-    std = value("std_rel", "std")
-    reason = value("reason")
-    return {
-        "bias_rel": value("bias_rel", "bias"),
-        "std_rel": None if std is None else np.asarray(std, dtype=float).reshape(-1),
-        "accepted": bool(value("accepted")),
-        "reason": reason or "",
-    }
-
-
-def result_health(result: Any) -> dict[str, Any]:
-    """:func:`health_fields` of a result's table, judged against its initialization."""
-    return health_fields(_get(result, "health"), _get(result, "health_init"))
-
-
-def result_table(result: Any, grid: np.ndarray) -> Table:
-    """The optimized table of a result (a :class:`Table`, or the (4, M+1) densities)."""
-    t = _get(result, "table")
-    if isinstance(t, Table):
-        return t
-    return Table(grid=np.asarray(grid, dtype=float), pdfs=np.asarray(t, dtype=float))
-
-
-def header_lines(spectrum: Spectrum, result: Any, seed: int | None) -> list[str]:
-    """Comment header of a written table: ``key: value`` lines (``show`` reads them back)."""
-    h = result_health(result)
-    hi = health_fields(_get(result, "health_init"))
-    ju, jr = _get(result, "J_uniform"), _get(result, "J")
-    lines = [
-        f"wavelength-pdf {__version__}: four wavelength densities (SPEC 2; "
-        f"piecewise linear, balance heuristic)",
-        f"name: {spectrum.name}",
-        f"source: {spectrum.source}",
-        "objective: J = mean over u of CIEDE2000(C(u), c) (SPEC 4); J_fine: the same with a "
-        "finer u quadrature; J_uniform: stratified uniform sampling; J_init: equal-mass "
-        "initialization",
-        f"J_uniform: {_fmt(ju)}",
-        f"J_init: {_fmt(_get(result, 'J_init'))}",
-        f"J: {_fmt(jr)}",
-        f"J_fine: {_fmt(_get(result, 'J_fine'))}",
-    ]
-    if isinstance(ju, (float, int, np.floating)) and ju and jr is not None:
-        lines.append(f"J_over_uniform: {_fmt(float(jr) / float(ju))}")
-    if h:
-        lines += [f"bias_rel: {_fmt(h['bias_rel'])}",
-                  f"std_rel: {_fmt(h['std_rel'])}",
-                  f"accepted: {h['accepted']}"]
-    if hi:
-        lines += [f"init_bias_rel: {_fmt(hi['bias_rel'])}",
-                  f"init_std_rel: {_fmt(hi['std_rel'])}"]
-    lines += [f"solver: {_get(result, 'solver')}",
-              f"seed: {seed}",
-              f"seconds: {_fmt(_get(result, 'seconds'))}",
-              f"message: {_get(result, 'message', '')}",
-              f"version: {__version__}"]
-    return lines
-
-
-def read_header(table: Table) -> dict[str, str]:
-    """``key: value`` comment lines of a table written by :func:`header_lines`."""
-    out: dict[str, str] = {}
-    for c in table.comments:
-        key, sep, value = c.partition(":")
-        if sep and re.fullmatch(r"[A-Za-z_]\w*", key.strip()):
-            out.setdefault(key.strip(), value.strip())
-    return out
-
-
-def summary_line(spectrum: Spectrum, result: Any, out: Path | None) -> str:
-    """One line: name, J result vs uniform and init, health, solver, time, output."""
-    h = result_health(result)
-    ju, ji, jr = (_get(result, k) for k in ("J_uniform", "J_init", "J"))
-    ratio = f" = {float(jr) / float(ju):.4f} x uniform" if ju else ""
-    std = h.get("std_rel")
-    std_s = "/".join(f"{v:.3g}" for v in std) if std is not None else "?"
-    bias = h.get("bias_rel")
-    state = "accepted" if h.get("accepted") else f"NOT accepted ({h.get('reason') or _get(result, 'message', '')})"
-    dest = f" -> {out}" if out is not None else ""
-    return (f"{spectrum.name}: J {float(jr):.5g} (uniform {float(ju):.5g}, init {float(ji):.5g})"
-            f"{ratio}; bias {float(bias) if bias is not None else float('nan'):.2g}, "
-            f"std/c {std_s}; {state}; {_get(result, 'solver')} "
-            f"{float(_get(result, 'seconds', 0.0)):.1f} s{dest}")
-
-
-def safe_name(name: str) -> str:
-    """``name`` made safe as a file name (runs of other characters become '_')."""
-    return re.sub(r"[^\w.+-]+", "_", name).strip("_") or "table"
 
 
 def output_paths(spectra: Sequence[Spectrum], out: str) -> list[Path]:
@@ -288,47 +139,6 @@ class _Progress:
 # optimize
 # --------------------------------------------------------------------------------------
 
-@dataclass
-class Outcome:
-    """What :func:`optimize_one` did for one spectrum."""
-
-    spectrum: Spectrum
-    result: Any
-    path: Path
-    written: bool
-
-
-def optimize_one(spectrum: Spectrum, path: Path, grid: np.ndarray, solver: str | None,
-                 seed: int, max_seconds: float | None, progress: Callable | None,
-                 colour_bar: Path | None = None, plot: Path | None = None) -> Outcome:
-    """Optimize one spectrum; write its table (only if accepted) and the optional images."""
-    from wavelength_pdf.optimize import optimize_spectrum
-
-    kwargs: dict[str, Any] = {"grid": grid, "seed": seed, "progress": progress,
-                              "max_seconds": max_seconds}
-    if solver is not None:
-        kwargs["solver"] = solver
-    result = optimize_spectrum(spectrum, **kwargs)
-    table = result_table(result, grid)
-    accepted = bool(result_health(result).get("accepted")) and \
-        bool(_get(result, "accepted", True))
-    if accepted:
-        table = Table(grid=table.grid, pdfs=table.pdfs,
-                      comments=header_lines(spectrum, result, seed))
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_table(path, table)
-    if colour_bar is not None or plot is not None:
-        from wavelength_pdf import plots
-
-        if colour_bar is not None:
-            colour_bar.parent.mkdir(parents=True, exist_ok=True)
-            plots.colour_bar_png(colour_bar, spectrum, table)
-        if plot is not None:
-            plot.parent.mkdir(parents=True, exist_ok=True)
-            plots.densities_png(plot, spectrum, table)
-    return Outcome(spectrum, result, path, accepted)
-
-
 def cmd_optimize(args: argparse.Namespace) -> int:
     lo, hi = args.range
     grid = make_grid(lo, hi, args.grid_step)
@@ -352,7 +162,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         print(summary_line(sp, out.result, path if out.written else None))
         if not out.written:
             h = result_health(out.result)
-            reason = h.get("reason") or _get(out.result, "message", "") or "health checks failed"
+            reason = h.get("reason") or field_of(out.result, "message", "") or "health checks failed"
             print(f"{PROG}: {sp.name}: result not accepted ({reason}); table not written",
                   file=sys.stderr)
             status = EXIT_NOT_ACCEPTED
@@ -393,17 +203,17 @@ def _row(input_: str, name: str, table: str, status: str, message: str = "",
 def _values_from_result(result: Any) -> dict[str, Any]:
     h = result_health(result)
     std = h.get("std_rel")
-    ju, jr = _get(result, "J_uniform"), _get(result, "J")
+    ju, jr = field_of(result, "J_uniform"), field_of(result, "J")
     return {
-        "J_uniform": _fmt(ju), "J_init": _fmt(_get(result, "J_init")), "J": _fmt(jr),
-        "J_fine": _fmt(_get(result, "J_fine")),
-        "J_over_uniform": _fmt(float(jr) / float(ju)) if ju else "",
-        "bias_rel": _fmt(h.get("bias_rel")),
-        "std_rel_X": _fmt(std[0]) if std is not None else "",
-        "std_rel_Y": _fmt(std[1]) if std is not None else "",
-        "std_rel_Z": _fmt(std[2]) if std is not None else "",
-        "accepted": bool(h.get("accepted")), "solver": str(_get(result, "solver")),
-        "seconds": _fmt(_get(result, "seconds")),
+        "J_uniform": format_value(ju), "J_init": format_value(field_of(result, "J_init")), "J": format_value(jr),
+        "J_fine": format_value(field_of(result, "J_fine")),
+        "J_over_uniform": format_value(float(jr) / float(ju)) if ju else "",
+        "bias_rel": format_value(h.get("bias_rel")),
+        "std_rel_X": format_value(std[0]) if std is not None else "",
+        "std_rel_Y": format_value(std[1]) if std is not None else "",
+        "std_rel_Z": format_value(std[2]) if std is not None else "",
+        "accepted": bool(h.get("accepted")), "solver": str(field_of(result, "solver")),
+        "seconds": format_value(field_of(result, "seconds")),
     }
 
 
@@ -432,7 +242,7 @@ def _batch_job(job: dict[str, Any]) -> dict[str, Any]:
                          job["max_seconds"], None)
         status = "written" if o.written else "not accepted"
         msg = "" if o.written else str(result_health(o.result).get("reason")
-                                       or _get(o.result, "message", ""))
+                                       or field_of(o.result, "message", ""))
         return _row(spec, sp[0].name, str(out) if o.written else "", status, msg,
                     _values_from_result(o.result))
     except (SpectrumError, TableError, BadInput, OSError, ValueError) as e:
@@ -588,9 +398,9 @@ def cmd_show(args: argparse.Namespace) -> int:
         for sp in spectra:
             ev = evaluate_table(sp, table)
             h = result_health(ev)
-            ju, j = _get(ev, "J_uniform"), _get(ev, "J")
+            ju, j = field_of(ev, "J_uniform"), field_of(ev, "J")
             print(f"{sp.name}: J {float(j):.6g}" +
-                  (f" (J_fine {float(_get(ev, 'J_fine')):.6g})" if _get(ev, "J_fine") is not None else "") +
+                  (f" (J_fine {float(field_of(ev, 'J_fine')):.6g})" if field_of(ev, "J_fine") is not None else "") +
                   (f", uniform {float(ju):.6g}, ratio {float(j) / float(ju):.4f}" if ju else ""))
             if h:
                 std = h["std_rel"]

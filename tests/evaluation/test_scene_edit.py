@@ -64,3 +64,17 @@ def test_a_spectrum_without_energy_in_range_is_an_error(tmp_path: Path) -> None:
     dark = Spectrum("ir", "test", np.array([800.0, 900.0]), np.array([1.0, 1.0]))
     with pytest.raises(SpectrumError, match="no energy inside 380-780"):
         inline_spectrum(dark, 380, 780)
+
+
+def test_resolution_scale_applies_to_the_scene_size_or_pbrt_default(tmp_path: Path) -> None:
+    scene = tmp_path / "s.pbrt"
+    scene.write_text('Film "rgb" "integer xresolution" [ 1024 ] "integer yresolution" [ 720 ]\nWorldBegin\n')
+    text = edit_scene(scene, None, tmp_path / "c.pbrt", resolution=0.125).read_text()
+    assert '"integer xresolution" [ 128 ]' in text and '"integer yresolution" [ 90 ]' in text
+    # Only the height given: the width is pbrt-v4's default 1280, scaled; never below 1 pixel.
+    scene.write_text('Film "rgb" "integer yresolution" [ 720 ]\nWorldBegin\n')
+    text = edit_scene(scene, None, tmp_path / "c.pbrt", resolution=1e-4).read_text()
+    assert '"integer xresolution" [ 1 ]' in text and '"integer yresolution" [ 1 ]' in text
+    assert text.count("xresolution") == 1 and text.count("yresolution") == 1
+    with pytest.raises(ValueError, match="positive"):
+        edit_scene(scene, None, tmp_path / "c.pbrt", resolution=-1.0)

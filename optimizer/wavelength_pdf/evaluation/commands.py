@@ -1,4 +1,4 @@
-"""The evaluation's subcommands of ``wavelength-pdf``: ``evaluate``, ``grid`` and ``demo``.
+"""The evaluation's subcommands of ``wavelength-pdf``: ``evaluate``, ``grid``, ``published``, ``demo``.
 
 ``demo`` is the README's main job: the project's own Cornell box (``scenes/cornell-box``) lit
 by the project's tri-band fluorescent spectrum, at a resolution and spp that fit a small
@@ -13,10 +13,13 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from wavelength_pdf import plots
 from wavelength_pdf.evaluation import report
 from wavelength_pdf.evaluation.protocol import DEFAULT_METHODS, DEFAULT_SPP, Config, evaluate, write_rows
 from wavelength_pdf.evaluation.render import DEFAULT_PBRT, REPO
+from wavelength_pdf.produce import safe_name
 from wavelength_pdf.spectra import load_spectrum
+from wavelength_pdf.table import read_table
 
 DEMO_SCENE = REPO / "scenes" / "cornell-box" / "scene.pbrt"
 DEMO_SPECTRUM = REPO / "spectra" / "tri-band-fluorescent.spd"
@@ -32,7 +35,18 @@ def _resolution(text: str) -> tuple[int, int]:
     return w, h
 
 
-def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolution="128x128") -> None:
+def _scale(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (v > 0 and v < float("inf")):
+        raise argparse.ArgumentTypeError(f"the scale must be positive, got {text!r}")
+    return v
+
+
+def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolution: str | None = "128x128",
+            scale: float | None = None, truth_method="uniform", seeds=1) -> None:
     p.add_argument("--spp", type=int, nargs="+", default=list(spp),
                    help=f"samples per pixel of the compared images (default: {' '.join(map(str, spp))})")
     p.add_argument("--methods", nargs="+", default=list(DEFAULT_METHODS), choices=list(DEFAULT_METHODS),
@@ -40,10 +54,19 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
                         "range (the baseline), visible = pbrt-v4's default, table = the optimized table")
     p.add_argument("--truth-spp", type=int, default=truth_spp,
                    help=f"samples per pixel of the ground truth (default {truth_spp}; cached)")
-    p.add_argument("--truth-method", default="uniform", choices=list(DEFAULT_METHODS),
-                   help="sampler of the ground truth (default uniform; any unbiased one converges)")
-    p.add_argument("--resolution", type=_resolution, default=_resolution(resolution),
-                   help=f"image size WxH, overriding the scene's film (default {resolution})")
+    p.add_argument("--truth-method", default=truth_method, choices=list(DEFAULT_METHODS),
+                   help=f"sampler of the ground truth (default {truth_method}; every one is unbiased, the "
+                        "table converges fastest on line spectra)")
+    p.add_argument("--seeds", type=int, default=seeds,
+                   help=f"images per method and spp, with seeds SEED, SEED+1, ...; their spread is the noise "
+                        f"of the mean error (default {seeds})")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument("--resolution", type=_resolution, default=None,
+                      help=f"image size WxH, overriding the scene's film (default {resolution or 'the scene'})")
+    size.add_argument("--resolution-scale", type=_scale, default=None, metavar="S",
+                      help="scale the scene's own film size by S instead (e.g. 0.125 = 1/8 a side)"
+                           + (f" (default {scale:g})" if scale else ""))
+    p.set_defaults(default_resolution=_resolution(resolution) if resolution else scale)
     p.add_argument("--range", type=float, nargs=2, default=(380.0, 780.0), metavar=("LO", "HI"),
                    help="wavelength range of the table and of every sampler, nm (default 380 780)")
     p.add_argument("--seed", type=int, default=1, help="renderer seed of the compared images")
@@ -52,7 +75,7 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
 
 
 def add_subcommands(sub) -> None:
-    """Register ``evaluate``, ``grid`` and ``demo`` on the main parser's subparsers."""
+    """Register ``evaluate``, ``grid``, ``published`` and ``demo`` on the main parser's subparsers."""
     p = sub.add_parser("evaluate", help="render ground truth, baseline and table images of a scene lit "
                                         "by a spectrum; report CIEDE2000 against spp and time",
                        description="Renders a copy of SCENE lit by SPECTRUM with each sampler at each spp, "
@@ -66,13 +89,33 @@ def add_subcommands(sub) -> None:
     p.set_defaults(func=cmd_evaluate)
 
     g = sub.add_parser("grid", help="many scene x spectrum evaluations with one progress bar (resumable)",
-                       description="Runs `evaluate` for every SCENE x SPECTRUM pair into OUTDIR/<scene>/<spectrum>/, "
-                                   "reusing finished renders, and writes one combined results table.")
-    g.add_argument("--scenes", type=Path, nargs="+", required=True, help="pbrt-v4 scenes")
-    g.add_argument("--spectra", nargs="+", required=True, help="lamp spectra")
+                       description="Runs `evaluate` for every SCENE x SPECTRUM pair (or for the given "
+                                   "--pairs) into OUTDIR/<scene>/<spectrum>/, reusing finished renders, and "
+                                   "writes one combined results table, report.md and summary plots.")
+    g.add_argument("--scenes", type=Path, nargs="+", default=[], help="pbrt-v4 scenes")
+    g.add_argument("--spectra", nargs="+", default=[], help="lamp spectra (every scene gets every spectrum)")
+    g.add_argument("--pairs", nargs="+", default=[], metavar="SCENE=SPECTRUM",
+                   help="scene and spectrum pairs, instead of (or besides) the full --scenes x --spectra grid")
     g.add_argument("-o", "--outdir", type=Path, required=True, help="output folder")
     _common(g)
     g.set_defaults(func=cmd_grid)
+
+    pub = sub.add_parser("published", help="the published comparison (Cornell box, Veach MIS; LSPDD lamps), "
+                                           "at reduced resolution, from ../shared",
+                         description="Runs the grid of the published evaluation: the Cornell box under the "
+                                     "compact fluorescent (LSPDD 2482), the sun (2629) and the scotopic curve "
+                                     "(2639), and Veach MIS under CIE A (2659), the Philips High Bay metal "
+                                     "halide (2641) and the sun, plus the Cornell box under CIE D65 as a "
+                                     "further smooth spectrum. Scenes and spectra come from --shared.")
+    pub.add_argument("--shared", type=Path, default=REPO.parent / "shared",
+                     help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the repository)")
+    pub.add_argument("-o", "--outdir", type=Path, default=REPO / "out" / "published",
+                     help="output folder (default out/published)")
+    pub.add_argument("--only", nargs="+", default=None, metavar="SCENE/SPECTRUM",
+                     help="run only these jobs, e.g. cornell-box/2482")
+    _common(pub, spp=(16, 64, 256, 512), truth_spp=16384, resolution=None, scale=0.125, truth_method="table",
+            seeds=3)
+    pub.set_defaults(func=cmd_published)
 
     d = sub.add_parser("demo", help="the main job: the project's Cornell box under its tri-band lamp "
                                     "(no ../shared needed)",
@@ -86,19 +129,39 @@ def add_subcommands(sub) -> None:
     d.set_defaults(func=cmd_demo)
 
 
+#: The published comparison: (scene folder, LSPDD number or built-in name, label).
+PUBLISHED = (
+    ("cornell-box", "2482", "compact fluorescent"),
+    ("cornell-box", "2629", "sun"),
+    ("cornell-box", "2639", "scotopic"),
+    ("veach-mis", "2659", "CIE A"),
+    ("veach-mis", "2641", "Philips High Bay"),
+    ("veach-mis", "2629", "sun"),
+    ("cornell-box", "cie:D65", "CIE D65 (not in the published set)"),
+)
+
+
 def _config(args) -> Config:
+    resolution = args.resolution or args.resolution_scale or args.default_resolution
+    if args.seeds < 1:
+        raise ValueError(f"--seeds must be at least 1, got {args.seeds}")
     return Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp, truth_method=args.truth_method,
-                  resolution=args.resolution, seed=args.seed, nthreads=args.nthreads,
+                  resolution=resolution, seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
                   lo=args.range[0], hi=args.range[1], pbrt=args.pbrt)
+
+
+def _images(config: Config) -> int:
+    return len(config.methods) * len(config.spp) * config.seeds
 
 
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
             bar: tqdm | None = None):
+    """One evaluation with its plots: error against spp and time, error maps, colour bar."""
     spectrum = load_spectrum(spectrum_spec, lo=config.lo, hi=config.hi)
 
     def say(msg: str) -> None:
         if bar is not None:
-            bar.set_postfix_str(msg)
+            bar.set_postfix_str(f"{outdir.name}: {msg}")
             if msg.startswith(tuple(config.methods)):
                 bar.update(1)
 
@@ -106,31 +169,87 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
     title = f"{ev.rows[0].scene} under {spectrum.name}"
     report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
     report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
+    say("colour bar")
+    t = read_table(ev.table)
+    plots.colour_bar_png(outdir / "colour-bar.png", spectrum, t)
+    plots.densities_png(outdir / "densities.png", spectrum, t)
     (outdir / "results.md").write_text(report.markdown_table(ev.rows))
     return ev
 
 
 def cmd_evaluate(args) -> int:
     config = _config(args)
-    with tqdm(total=len(config.methods) * len(config.spp), desc="evaluate", file=sys.stderr, unit="image") as bar:
+    with tqdm(total=_images(config), desc="evaluate", file=sys.stderr, unit="image") as bar:
         ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar)
     print(report.markdown_table(ev.rows))
     print(f"results: {args.outdir / 'results.csv'}; plots: {args.outdir}/*.png")
     return 0
 
 
+def _job_dir(outdir: Path, scene: Path, spectrum: str) -> Path:
+    return outdir / (scene.parent.name or scene.stem) / safe_name(Path(spectrum.replace(":", "-")).stem)
+
+
+def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: str) -> list:
+    """Evaluate every (scene, spectrum) job into its own folder; write the combined report."""
+    for scene, _ in jobs:
+        if not Path(scene).is_file():
+            raise FileNotFoundError(2, "no such scene file", str(scene))
+    done = []
+    with tqdm(total=len(jobs) * _images(config), desc="grid", file=sys.stderr, unit="image") as bar:
+        for scene, spec in jobs:
+            folder = _job_dir(outdir, Path(scene), spec)
+            done.append((folder, run_one(Path(scene), spec, folder, config, None, bar).rows))
+    rows = [r for _, job in done for r in job]
+    write_rows(outdir / "results.csv", rows)
+    (outdir / "results.md").write_text(report.markdown_table(rows))
+    report.plot_summary(rows, outdir / "summary.png", title)
+    report.write_report(outdir / "report.md", title, done, config)
+    return rows
+
+
+def _pair(text: str) -> tuple[Path, str]:
+    scene, sep, spectrum = text.partition("=")
+    if not sep or not scene or not spectrum:
+        raise ValueError(f"--pairs expects SCENE=SPECTRUM, got {text!r}")
+    return Path(scene), spectrum
+
+
 def cmd_grid(args) -> int:
     config = _config(args)
-    jobs = list(itertools.product(args.scenes, args.spectra))
-    rows = []
-    with tqdm(total=len(jobs) * len(config.methods) * len(config.spp), desc="grid", file=sys.stderr,
-              unit="image") as bar:
-        for scene, spec in jobs:
-            sub = args.outdir / (scene.parent.name or scene.stem) / Path(spec.replace(":", "-")).stem
-            rows += run_one(scene, spec, sub, config, None, bar).rows
-    write_rows(args.outdir / "results.csv", rows)
-    (args.outdir / "results.md").write_text(report.markdown_table(rows))
+    jobs = list(itertools.product(args.scenes, args.spectra)) + [_pair(t) for t in args.pairs]
+    if not jobs:
+        raise ValueError("grid: give --scenes and --spectra, or --pairs")
+    rows = run_grid(jobs, args.outdir, config, "evaluation grid")
     print(report.markdown_table(rows))
+    print(f"report: {args.outdir / 'report.md'}")
+    return 0
+
+
+def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Path, str]]:
+    """The (scene, spectrum) pairs of the published comparison, as paths under ``shared``."""
+    jobs = []
+    for scene, spec, _ in PUBLISHED:
+        if only and f"{scene}/{spec}" not in only:
+            continue
+        path = shared / "scenes" / scene / "scene-v4.pbrt"
+        spectrum = spec if ":" in spec else str(shared / "spectra" / "lspdd" / f"{spec}.csv")
+        for f in (path, Path(spectrum) if ":" not in spectrum else None):
+            if f is not None and not f.is_file():
+                raise FileNotFoundError(2, "missing (the published comparison needs ../shared)", str(f))
+        jobs.append((path, spectrum))
+    if not jobs:
+        known = ", ".join(f"{s}/{p}" for s, p, _ in PUBLISHED)
+        raise ValueError(f"--only matches no job; the jobs are {known}")
+    return jobs
+
+
+def cmd_published(args) -> int:
+    config = _config(args)
+    jobs = published_jobs(args.shared, args.only)
+    rows = run_grid(jobs, args.outdir, config, "published comparison at reduced resolution")
+    print(report.markdown_table(rows))
+    print(f"report: {args.outdir / 'report.md'}")
     return 0
 
 
@@ -138,9 +257,10 @@ def cmd_demo(args) -> int:
     config = _config(args)
     print(f"demo: {args.scene.relative_to(REPO) if args.scene.is_relative_to(REPO) else args.scene} "
           f"lit by {args.spectrum}; output in {args.outdir}", file=sys.stderr)
-    with tqdm(total=len(config.methods) * len(config.spp), desc="demo", file=sys.stderr, unit="image") as bar:
+    with tqdm(total=_images(config), desc="demo", file=sys.stderr, unit="image") as bar:
         ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar)
     print(report.markdown_table(ev.rows))
     print(f"table: {ev.table}\nresults: {args.outdir / 'results.csv'}\n"
-          f"plots: {args.outdir / 'error-vs-spp-and-time.png'}, {args.outdir / 'error-maps.png'}")
+          f"plots: {args.outdir / 'error-vs-spp-and-time.png'}, {args.outdir / 'error-maps.png'}, "
+          f"{args.outdir / 'colour-bar.png'}")
     return 0

@@ -38,8 +38,12 @@ class Config:
     methods: Sequence[str] = DEFAULT_METHODS
     truth_spp: int = 8192
     truth_method: str = "uniform"
-    resolution: tuple[int, int] | None = (128, 128)
+    #: (width, height), a factor on the scene's own film size, or None to keep it.
+    resolution: tuple[int, int] | float | None = (128, 128)
     seed: int = 1
+    #: Images per (method, spp), with seeds ``seed, seed + 1, ...``: their spread is the noise
+    #: of the mean error (``Row.mean_sd``).
+    seeds: int = 1
     nthreads: int | None = None
     lo: float = 380.0
     hi: float = 780.0
@@ -59,6 +63,10 @@ class Row:
     p95: float
     seconds: float
     image: str
+    #: How many seeds the figures average, and the standard deviation of the per-seed mean
+    #: errors (NaN with one seed).
+    seeds: int = 1
+    mean_sd: float = float("nan")
 
 
 @dataclass
@@ -76,10 +84,9 @@ def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: flo
     if path.is_file():
         read_table(path)  # a damaged cache is an error, not silently reused
         return path
-    from wavelength_pdf.cli import make_grid, optimize_one
+    from wavelength_pdf.produce import make_grid, optimize_one
 
-    outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, None,
-                           colour_bar=path.with_name("colour-bar.png"))
+    outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, None)
     if not outcome.written:
         raise RuntimeError(f"{spectrum.source}: the optimized table was not accepted "
                            f"({getattr(outcome.result, 'message', '')})")
@@ -109,16 +116,31 @@ def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Con
     ev.truth, ev.truth_seconds = gt.image, gt.seconds
     truth = read_rgb(gt.image)
     name = scene_name or Path(scene).parent.name or Path(scene).stem
+    seeds = [config.seed + k for k in range(max(1, config.seeds))]
+    # Methods interleaved at each spp and seed, so that a change in the machine's load over
+    # the run does not favour one method's render times.
+    results: dict[tuple[str, int], list[tuple[metrics.ErrorStats, float, Path, np.ndarray]]] = {}
+    for spp in config.spp:
+        for seed in seeds:
+            for method in config.methods:
+                say(f"{method}: {spp} spp, seed {seed}")
+                r = rendering.render(ev.scene, outdir / "renders" / f"{method}-{spp}-seed{seed}.exr",
+                                     samplers[method], spp, seed=seed, nthreads=config.nthreads,
+                                     pbrt=config.pbrt)
+                emap = metrics.delta_e_map(read_rgb(r.image), truth)
+                results.setdefault((method, spp), []).append(
+                    (metrics.ErrorStats.of(emap), r.seconds, r.image, emap))
     for method in config.methods:
         for spp in config.spp:
-            say(f"{method}: {spp} spp")
-            r = rendering.render(ev.scene, outdir / "renders" / f"{method}-{spp}.exr", samplers[method], spp,
-                                 seed=config.seed, nthreads=config.nthreads, pbrt=config.pbrt)
-            emap = metrics.delta_e_map(read_rgb(r.image), truth)
-            stats = metrics.ErrorStats.of(emap)
-            ev.error_maps[(method, spp)] = emap
-            ev.rows.append(Row(name, spectrum.name, method, spp, stats.mean, stats.median, stats.p95,
-                               r.seconds, str(r.image.relative_to(outdir))))
+            runs = results[(method, spp)]
+            means = np.array([st.mean for st, *_ in runs])
+            ev.error_maps[(method, spp)] = runs[0][3]
+            ev.rows.append(Row(name, spectrum.name, method, spp, float(means.mean()),
+                               float(np.mean([st.median for st, *_ in runs])),
+                               float(np.mean([st.p95 for st, *_ in runs])),
+                               float(np.mean([sec for _, sec, *_ in runs])),
+                               str(runs[0][2].relative_to(outdir)), len(runs),
+                               float(means.std(ddof=1)) if len(runs) > 1 else float("nan")))
     write_rows(outdir / "results.csv", ev.rows)
     return ev
 

@@ -5,9 +5,13 @@
   published comparison).
 - :func:`plot_error`: mean error against spp and against seconds, log-log, one line a method.
 - :func:`plot_error_maps`: false-colour per-pixel CIEDE2000 maps, one panel an image.
+- :func:`plot_summary`: error against spp and against seconds for many jobs, one row a job.
+- :func:`write_report`: a Markdown report of a grid, with every job's plots and colour bar.
 """
 from __future__ import annotations
 
+import math
+import os
 from collections import defaultdict
 from pathlib import Path
 from typing import Sequence
@@ -18,7 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from wavelength_pdf.evaluation.protocol import Row  # noqa: E402
+from wavelength_pdf.evaluation.protocol import Config, Row  # noqa: E402
 
 STYLE = {"uniform": ("tab:red", "o"), "visible": ("tab:blue", "s"), "table": ("tab:green", "^")}
 
@@ -30,8 +34,15 @@ def _grouped(rows: Sequence[Row]):
     return groups
 
 
+def _error_cell(r: Row) -> str:
+    sd = f" ± {r.mean_sd:.3f}" if r.seeds > 1 and math.isfinite(r.mean_sd) else ""
+    return f"{r.mean:.3f}{sd} ({r.median:.3f} / {r.p95:.3f})"
+
+
 def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "table") -> str:
-    """The results as a Markdown table: mean dE2000 (median, p95) and seconds per method."""
+    """The results as a Markdown table: mean dE2000 (median, p95) and seconds per method.
+
+    With several seeds, the mean carries ± the standard deviation of the per-seed means."""
     methods = list(dict.fromkeys(r.method for r in rows))
     head = ["scene", "illuminant", "spp"] + [f"{m} ΔE mean (median / p95)" for m in methods] + \
            [f"{m} s" for m in methods]
@@ -41,8 +52,8 @@ def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for (scene, illum, spp), by in sorted(_grouped(rows).items()):
         cells = [scene, illum, str(spp)]
-        cells += [f"{by[m].mean:.3f} ({by[m].median:.3f} / {by[m].p95:.3f})" if m in by else "" for m in methods]
-        cells += [f"{by[m].seconds:.2f}" if m in by else "" for m in methods]
+        cells += [_error_cell(by[m]) if m in by else "" for m in methods]
+        cells += [f"{by[m].seconds:.3g}" if m in by else "" for m in methods]
         if ratio:
             cells.append(f"{by[baseline].mean / by[ours].mean:.2f}" if baseline in by and ours in by else "")
         lines.append("| " + " | ".join(cells) + " |")
@@ -91,3 +102,55 @@ def plot_error_maps(maps: dict[tuple[str, int], np.ndarray], path: Path, title: 
         fig.suptitle(title)
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_summary(rows: Sequence[Row], path: Path, title: str = "") -> None:
+    """Mean CIEDE2000 against spp and against seconds, log-log, one row of panels per job."""
+    jobs = list(dict.fromkeys((r.scene, r.illuminant) for r in rows))
+    fig, axes = plt.subplots(len(jobs), 2, figsize=(9, 2.6 * len(jobs) + 0.6), squeeze=False,
+                             constrained_layout=True)
+    for (scene, illum), (ax_spp, ax_t) in zip(jobs, axes):
+        mine = [r for r in rows if (r.scene, r.illuminant) == (scene, illum)]
+        for method in dict.fromkeys(r.method for r in mine):
+            rs = sorted((r for r in mine if r.method == method), key=lambda r: r.spp)
+            colour, marker = STYLE.get(method, ("k", "x"))
+            ax_spp.loglog([r.spp for r in rs], [r.mean for r in rs], marker=marker, color=colour, label=method)
+            ax_t.loglog([r.seconds for r in rs], [r.mean for r in rs], marker=marker, color=colour, label=method)
+        ax_spp.set_title(f"{scene}: {illum}", fontsize=9)
+        ax_t.set_title("same, against wall-clock seconds", fontsize=9)
+        ax_spp.set_ylabel("mean CIEDE2000")
+        for ax in (ax_spp, ax_t):
+            ax.grid(True, which="both", alpha=0.3)
+    axes[-1][0].set_xlabel("samples per pixel")
+    axes[-1][1].set_xlabel("render time (s)")
+    axes[0][0].legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row]]], config: Config) -> None:
+    """A Markdown report of a grid: settings, the results table, the summary plot, and per job
+    its colour bar, error plots and error maps (links relative to the report)."""
+    path = Path(path)
+    rows = [r for _, job in jobs for r in job]
+    rel = lambda p: os.path.relpath(p, path.parent)  # noqa: E731
+    res = config.resolution
+    size = f"{res[0]}x{res[1]} pixels" if isinstance(res, tuple) else \
+        (f"the scenes' film size times {res:g}" if res else "the scenes' film size")
+    lines = [f"# {title}", "",
+             f"- Images: {size}; wavelengths {config.lo:g}-{config.hi:g} nm; methods "
+             f"{', '.join(config.methods)}; spp {', '.join(map(str, config.spp))}; "
+             f"{config.seeds} seed(s) per image (± is the standard deviation of the per-seed means).",
+             f"- Ground truth: {config.truth_method} sampling, {config.truth_spp} spp, its own seed.",
+             "- Error: per-pixel CIEDE2000 against the ground truth (SPEC 6): mean (median / 95th "
+             "percentile). Seconds: wall clock of the renderer process, start-up included.", "",
+             markdown_table(rows), "", f"![summary]({rel(path.parent / 'summary.png')})", ""]
+    for folder, job in jobs:
+        head = f"{job[0].scene}: {job[0].illuminant}" if job else folder.name
+        lines += [f"## {head}", "",
+                  f"![colour bar]({rel(folder / 'colour-bar.png')})", "",
+                  f"![error against spp and time]({rel(folder / 'error-vs-spp-and-time.png')})", "",
+                  f"![error maps]({rel(folder / 'error-maps.png')})", ""]
+    path.write_text("\n".join(lines))

@@ -5,7 +5,7 @@ The copy is written elsewhere (../shared is read-only), so every file the scene 
 emitter's ``L``/``I`` (spectrum, rgb or blackbody) becomes the given spectrum, inline and cut to
 the evaluation's wavelength range, so that every sampler of the comparison integrates the same
 thing; its "scale" is kept (pbrt-v4 normalizes the spectrum to 1 nit before scaling it). The
-film's resolution can be overridden to fit a small machine.
+film's resolution can be overridden, or scaled by a factor, to fit a small machine.
 
 Statements are found with the optimizer's own pbrt tokenizer (``scene_spectra``); only the
 spans of the tokens that change are replaced, so everything else stays byte for byte.
@@ -22,6 +22,8 @@ from wavelength_pdf.spectra import Spectrum, SpectrumError
 #: Parameters whose string value names a file, relative to the file that names it.
 _FILE_PARAMS = {"filename", "mapname", "lensfile", "bsdffile"}
 _INTENSITY_LIGHTS = {"point", "spot", "goniometric", "projection"}
+#: pbrt-v4's film size when the scene gives none.
+DEFAULT_FILM = (1280, 720)
 #: Directives with a parameter list, and how many quoted arguments come before it.
 _WITH_PARAMS = {d: 1 for d in ("Shape", "LightSource", "AreaLightSource", "Material", "MakeNamedMaterial",
                                "Film", "Camera", "Sampler", "Integrator", "PixelFilter", "Accelerator",
@@ -40,14 +42,24 @@ def inline_spectrum(spectrum: Spectrum, lo: float, hi: float) -> str:
     return "[ " + " ".join(f"{w:.10g} {v:.10g}" for w, v in zip(grid, values)) + " ]"
 
 
+def _scaled(pixels: float, factor: float) -> int:
+    """A film size times ``factor``, rounded, at least 1."""
+    if not (factor > 0 and np.isfinite(factor)):
+        raise ValueError(f"resolution scale must be a positive number, got {factor!r}")
+    return max(1, int(round(pixels * factor)))
+
+
 def _span(tokens: list[Token]) -> tuple[int, int]:
     return tokens[0].start, tokens[-1].end
 
 
 def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
                lo: float = 380.0, hi: float = 780.0,
-               resolution: tuple[int, int] | None = None) -> Path:
+               resolution: tuple[int, int] | float | None = None) -> Path:
     """Write a copy of ``scene`` at ``out`` lit by ``spectrum`` (None: keep the emitters).
+
+    ``resolution`` is the film's new (width, height), or a factor applied to the scene's own
+    size (pbrt-v4's 1280x720 when it gives none; at least one pixel a side), or None to keep it.
 
     Included files are inlined into the copy's folder as edited copies of their own, so that
     emitters and file names inside them are handled the same way.
@@ -67,7 +79,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
 
 
 def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, hi: float,
-               resolution: tuple[int, int] | None, depth: int) -> str:
+               resolution: tuple[int, int] | float | None, depth: int) -> str:
     if depth > 32:
         raise SpectrumError(f"{path}: Include nesting deeper than 32 (a cycle?)")
     try:
@@ -107,7 +119,16 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
                 edits.append((start, end, f'"spectrum {pname}" {inline_spectrum(spectrum, lo, hi)}'))
                 replaced = True
             elif d == "Film" and resolution and p.name in ("xresolution", "yresolution") and p.values:
-                value = resolution[0] if p.name == "xresolution" else resolution[1]
+                axis = 0 if p.name == "xresolution" else 1
+                if isinstance(resolution, tuple):
+                    value = resolution[axis]
+                else:
+                    try:
+                        pixels = float(p.values[0].text)
+                    except ValueError:
+                        raise SpectrumError(f"{path}:{p.values[0].line}: {p.name} is not a number: "
+                                            f"{p.values[0].text!r}") from None
+                    value = _scaled(pixels, resolution)
                 edits.append((*_span(p.values), str(value)))
             elif p.type == "string" and p.name in _FILE_PARAMS and p.values:
                 absolute(p.values[0])
@@ -117,10 +138,15 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
             # No L/I given (the colour space's illuminant): add the spectrum after the type.
             anchor = st.args[0].end if st.args else st.directive.end
             edits.append((anchor, anchor, f' "spectrum {pname}" {inline_spectrum(spectrum, lo, hi)}'))
-        if d == "Film" and resolution and not any(p.name == "xresolution" for p in st.params):
+        if d == "Film" and resolution:
+            given = {p.name for p in st.params}
+            size = resolution if isinstance(resolution, tuple) else \
+                tuple(_scaled(v, resolution) for v in DEFAULT_FILM)
             anchor = st.args[0].end if st.args else st.directive.end
-            edits.append((anchor, anchor, f' "integer xresolution" [ {resolution[0]} ] '
-                                          f'"integer yresolution" [ {resolution[1]} ]'))
+            added = "".join(f' "integer {name}" [ {size[axis]} ]'
+                            for axis, name in enumerate(("xresolution", "yresolution")) if name not in given)
+            if added:
+                edits.append((anchor, anchor, added))
     for start, end, new in sorted(edits, key=lambda e: e[0], reverse=True):
         text = text[:start] + new + text[end:]
     return text

@@ -1,0 +1,110 @@
+"""The evaluation end to end on the project's Cornell box at a few pixels: every method and spp
+gets an image, errors fall with spp, the table beats the baseline on a line lamp, renders
+are reused on a rerun (resumable) and redone when an input changes, and the grid report
+links files that exist."""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wavelength_pdf.cli import main
+from wavelength_pdf.evaluation import commands, report
+from wavelength_pdf.evaluation.protocol import Config, evaluate
+from wavelength_pdf.spectra import load_spectrum
+from wavelength_pdf.table import read_table, write_table
+
+TABLE = Path(__file__).resolve().parents[1] / "data" / "tables" / "tri-band-fluorescent-optimized.csv"
+
+
+@pytest.fixture(scope="module")
+def cornell(repo: Path) -> Path:
+    return repo / "scenes" / "cornell-box" / "scene.pbrt"
+
+
+@pytest.fixture(scope="module")
+def lamp(repo: Path):
+    return load_spectrum(str(repo / "spectra" / "tri-band-fluorescent.spd"), lo=380, hi=780)
+
+
+def _config(pbrt: Path, **kw) -> Config:
+    base = dict(spp=(4, 64), truth_spp=2048, truth_method="table", resolution=(12, 12), seeds=2,
+                nthreads=2, pbrt=pbrt)
+    base.update(kw)
+    return Config(**base)
+
+
+def test_rows_errors_fall_and_the_table_beats_uniform(tmp_path, cornell, lamp, pbrt) -> None:
+    ev = evaluate(cornell, lamp, tmp_path, _config(pbrt), table=TABLE)
+    by = {(r.method, r.spp): r for r in ev.rows}
+    assert set(by) == {(m, s) for m in ("uniform", "visible", "table") for s in (4, 64)}
+    for r in ev.rows:
+        assert (tmp_path / r.image).is_file() and r.seeds == 2
+        assert np.isfinite(r.mean_sd) and r.mean_sd >= 0 and r.seconds > 0
+        assert 0 <= r.median <= r.p95
+    for m in ("uniform", "visible", "table"):
+        assert by[(m, 64)].mean < by[(m, 4)].mean, m
+    # The tri-band lamp is the method's case: its table's colour error is far below uniform's.
+    for s in (4, 64):
+        assert by[("table", s)].mean < 0.6 * by[("uniform", s)].mean, s
+    assert (tmp_path / "results.csv").read_text().count("\n") == 1 + len(ev.rows)
+
+
+def test_reruns_reuse_renders_and_a_changed_table_renders_again(tmp_path, cornell, lamp, pbrt) -> None:
+    table = tmp_path / "t.csv"
+    shutil.copy(TABLE, table)
+    config = _config(pbrt, spp=(4,), truth_spp=64, seeds=1, methods=("uniform", "table"))
+    evaluate(cornell, lamp, tmp_path / "ev", config, table=table)
+    metas = sorted((tmp_path / "ev" / "renders").glob("*.json"))
+    stamp = {m.name: m.stat().st_mtime_ns for m in metas}
+    evaluate(cornell, lamp, tmp_path / "ev", config, table=table)
+    assert {m.name: m.stat().st_mtime_ns for m in metas} == stamp  # nothing rendered again
+    t = read_table(table)
+    write_table(table, type(t)(grid=t.grid, pdfs=t.pdfs[::-1].copy()))  # same densities, new order
+    evaluate(cornell, lamp, tmp_path / "ev", config, table=table)
+    after = {m.name: m.stat().st_mtime_ns for m in metas}
+    assert after["table-4-seed1.json"] != stamp["table-4-seed1.json"]
+    assert after["uniform-4-seed1.json"] == stamp["uniform-4-seed1.json"]
+    assert json.loads((tmp_path / "ev" / "renders" / "table-4-seed1.json").read_text())["seconds"] > 0
+
+
+def test_grid_report_links_existing_files(tmp_path, cornell, repo, pbrt, monkeypatch) -> None:
+    # The tri-band table is given, so that the grid does not spend time optimizing.
+    real = commands.run_one
+    monkeypatch.setattr(commands, "run_one",
+                        lambda scene, spec, out, config, table, bar=None: real(scene, spec, out, config, TABLE, bar))
+    config = _config(pbrt, spp=(4,), truth_spp=64, seeds=1)
+    spd = str(repo / "spectra" / "tri-band-fluorescent.spd")
+    rows = commands.run_grid([(cornell, spd)], tmp_path, config, "test grid")
+    assert len(rows) == 3
+    text = (tmp_path / "report.md").read_text()
+    links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+    assert len(links) == 4  # summary, and the job's colour bar, error plot and error maps
+    for link in links:
+        assert (tmp_path / link).is_file(), link
+    assert "| cornell-box |" in text and report.markdown_table(rows) in text
+
+
+def test_command_line_errors_exit_2_and_name_the_problem(tmp_path, capsys) -> None:
+    assert main(["grid", "--pairs", "no-equals-sign", "-o", str(tmp_path)]) == 2
+    assert "SCENE=SPECTRUM" in capsys.readouterr().err
+    assert main(["grid", "--pairs", f"{tmp_path}/missing.pbrt=cie:D65", "-o", str(tmp_path)]) == 2
+    assert "missing.pbrt" in capsys.readouterr().err
+    assert main(["published", "--shared", str(tmp_path / "nowhere"), "-o", str(tmp_path)]) == 2
+    assert "nowhere" in capsys.readouterr().err
+    assert main(["evaluate", "x.pbrt", "cie:D65", "-o", str(tmp_path), "--seeds", "0"]) == 2
+    with pytest.raises(SystemExit):
+        main(["evaluate", "x.pbrt", "cie:D65", "-o", str(tmp_path), "--resolution-scale", "-1"])
+
+
+def test_published_jobs_exist_in_shared(shared) -> None:
+    jobs = commands.published_jobs(shared)
+    assert len(jobs) == len(commands.PUBLISHED)
+    assert {p.parent.name for p, _ in jobs} == {"cornell-box", "veach-mis"}
+    assert commands.published_jobs(shared, ["veach-mis/2641"])[0][1].endswith("2641.csv")
+    with pytest.raises(ValueError, match="no job"):
+        commands.published_jobs(shared, ["teapot/1"])
