@@ -108,3 +108,30 @@ def test_published_jobs_exist_in_shared(shared) -> None:
     assert commands.published_jobs(shared, ["veach-mis/2641"])[0][1].endswith("2641.csv")
     with pytest.raises(ValueError, match="no job"):
         commands.published_jobs(shared, ["teapot/1"])
+
+
+def test_ratio_error_matches_the_spread_of_simulated_seeds() -> None:
+    from wavelength_pdf.evaluation.protocol import Row
+
+    def row(mean, sd, seeds):
+        return Row("s", "i", "m", 1, mean, mean, mean, 1.0, "x", seeds, sd)
+
+    assert np.isnan(report.ratio_and_error(row(4.0, 0.1, 1), row(1.0, 0.1, 1))[1])
+    # Means of 3 seeds each, drawn with the given per-seed spreads: the ratio's spread over many
+    # draws matches the first-order standard error.
+    rng = np.random.default_rng(5)
+    n, sd_b, sd_o = 3, 0.2, 0.05
+    ratios = rng.normal(4.0, sd_b, (20000, n)).mean(1) / rng.normal(1.0, sd_o, (20000, n)).mean(1)
+    r, err = report.ratio_and_error(row(4.0, sd_b, n), row(1.0, sd_o, n))
+    assert r == 4.0 and err == pytest.approx(ratios.std(), rel=0.05)
+
+
+def test_copy_report_keeps_links_and_leaves_renders(tmp_path) -> None:
+    out = tmp_path / "out"
+    (out / "a" / "b" / "renders").mkdir(parents=True)
+    for f in ("report.md", "results.csv", "summary.png", "a/b/colour-bar.png", "a/b/renders/x.exr",
+              "a/b/renders/x.png", "a/b/table.csv"):
+        (out / f).write_text(f)
+    copied = commands.copy_report(out, tmp_path / "docs")
+    assert sorted(p.relative_to(tmp_path / "docs").as_posix() for p in copied) == \
+        ["a/b/colour-bar.png", "report.md", "results.csv", "summary.png"]

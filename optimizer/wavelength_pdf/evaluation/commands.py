@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import shutil
 import sys
 from pathlib import Path
 
@@ -46,7 +47,7 @@ def _scale(text: str) -> float:
 
 
 def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolution: str | None = "128x128",
-            scale: float | None = None, truth_method="uniform", seeds=1) -> None:
+            scale: float | None = None, truth_method="table", seeds=1) -> None:
     p.add_argument("--spp", type=int, nargs="+", default=list(spp),
                    help=f"samples per pixel of the compared images (default: {' '.join(map(str, spp))})")
     p.add_argument("--methods", nargs="+", default=list(DEFAULT_METHODS), choices=list(DEFAULT_METHODS),
@@ -113,7 +114,10 @@ def add_subcommands(sub) -> None:
                      help="output folder (default out/published)")
     pub.add_argument("--only", nargs="+", default=None, metavar="SCENE/SPECTRUM",
                      help="run only these jobs, e.g. cornell-box/2482")
-    _common(pub, spp=(16, 64, 256, 512), truth_spp=16384, resolution=None, scale=0.125, truth_method="table",
+    pub.add_argument("--docs", type=Path, default=None, metavar="DIR",
+                     help="also copy report.md, results.csv and every plot (not the renders) to DIR, "
+                          "e.g. docs/evaluation")
+    _common(pub, spp=(16, 64, 256, 512), truth_spp=16384, resolution=None, scale=0.125,
             seeds=3)
     pub.set_defaults(func=cmd_published)
 
@@ -250,7 +254,24 @@ def cmd_published(args) -> int:
     rows = run_grid(jobs, args.outdir, config, "published comparison at reduced resolution")
     print(report.markdown_table(rows))
     print(f"report: {args.outdir / 'report.md'}")
+    if args.docs is not None:
+        copied = copy_report(args.outdir, args.docs)
+        print(f"copied {len(copied)} files to {args.docs}")
     return 0
+
+
+def copy_report(outdir: Path, dest: Path) -> list[Path]:
+    """Copy a grid's report.md, results.csv and plots (PNG) to ``dest``, keeping the folder
+    layout so that the report's relative links still resolve; renders stay behind."""
+    copied = []
+    for f in sorted(outdir.rglob("*")):
+        rel = f.relative_to(outdir)
+        if f.is_file() and (f.suffix == ".png" or rel.as_posix() in ("report.md", "results.csv")) \
+                and "renders" not in rel.parts:
+            (dest / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(f, dest / rel)
+            copied.append(dest / rel)
+    return copied
 
 
 def cmd_demo(args) -> int:

@@ -39,6 +39,24 @@ def _error_cell(r: Row) -> str:
     return f"{r.mean:.3f}{sd} ({r.median:.3f} / {r.p95:.3f})"
 
 
+def ratio_and_error(base: Row, ours: Row) -> tuple[float, float]:
+    """``base.mean / ours.mean`` and its standard error from the seeds' spread (NaN with one seed).
+
+    Each mean averages ``seeds`` images, so its standard error is ``mean_sd / sqrt(seeds)``;
+    relative errors add in quadrature (first order)."""
+    r = base.mean / ours.mean
+    if base.seeds < 2 or ours.seeds < 2:
+        return r, float("nan")
+    rel = math.hypot(base.mean_sd / base.mean / math.sqrt(base.seeds),
+                     ours.mean_sd / ours.mean / math.sqrt(ours.seeds))
+    return r, r * rel
+
+
+def _ratio_cell(base: Row, ours: Row) -> str:
+    r, err = ratio_and_error(base, ours)
+    return f"{r:.2f} ± {err:.2f}" if math.isfinite(err) else f"{r:.2f}"
+
+
 def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "table") -> str:
     """The results as a Markdown table: mean dE2000 (median, p95) and seconds per method.
 
@@ -55,7 +73,7 @@ def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "
         cells += [_error_cell(by[m]) if m in by else "" for m in methods]
         cells += [f"{by[m].seconds:.3g}" if m in by else "" for m in methods]
         if ratio:
-            cells.append(f"{by[baseline].mean / by[ours].mean:.2f}" if baseline in by and ours in by else "")
+            cells.append(_ratio_cell(by[baseline], by[ours]) if baseline in by and ours in by else "")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
