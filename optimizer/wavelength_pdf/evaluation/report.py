@@ -21,6 +21,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib import ticker  # noqa: E402
 
 from wavelength_pdf.evaluation.protocol import Config, Row  # noqa: E402
 
@@ -78,6 +79,15 @@ def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "
     return "\n".join(lines) + "\n"
 
 
+def _log_axes(ax) -> None:
+    """Log-log axes with plain-number ticks at 1, 2, 5 x 10^k (short spans still get labels)."""
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(ticker.FormatStrFormatter("%g"))
+        axis.set_minor_formatter(ticker.NullFormatter())
+    ax.grid(True, which="both", alpha=0.3)
+
+
 def plot_error(rows: Sequence[Row], path: Path, title: str = "") -> None:
     """Mean CIEDE2000 against spp (left) and against render seconds (right), log-log."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
@@ -90,7 +100,7 @@ def plot_error(rows: Sequence[Row], path: Path, title: str = "") -> None:
     axes[1].set_xlabel("render time (s, wall clock)")
     for ax in axes:
         ax.set_ylabel("mean CIEDE2000 vs ground truth")
-        ax.grid(True, which="both", alpha=0.3)
+        _log_axes(ax)
         ax.legend()
     if title:
         fig.suptitle(title)
@@ -138,7 +148,7 @@ def plot_summary(rows: Sequence[Row], path: Path, title: str = "") -> None:
         ax_t.set_title("same, against wall-clock seconds", fontsize=9)
         ax_spp.set_ylabel("mean CIEDE2000")
         for ax in (ax_spp, ax_t):
-            ax.grid(True, which="both", alpha=0.3)
+            _log_axes(ax)
     axes[-1][0].set_xlabel("samples per pixel")
     axes[-1][1].set_xlabel("render time (s)")
     axes[0][0].legend(fontsize=8)
