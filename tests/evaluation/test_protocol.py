@@ -135,3 +135,19 @@ def test_copy_report_keeps_links_and_leaves_renders(tmp_path) -> None:
     copied = commands.copy_report(out, tmp_path / "docs")
     assert sorted(p.relative_to(tmp_path / "docs").as_posix() for p in copied) == \
         ["a/b/colour-bar.png", "report.md", "results.csv", "summary.png"]
+
+
+def test_render_reports_progress_and_the_renderer_s_errors(tmp_path, cornell, pbrt) -> None:
+    from wavelength_pdf.evaluation import render as rendering
+    from wavelength_pdf.evaluation.scene_edit import edit_scene
+
+    scene = edit_scene(cornell, None, tmp_path / "s.pbrt", resolution=(16, 16))
+    uniform = rendering.samplers(None, 380, 780)["uniform"]
+    seen: list[int] = []
+    r = rendering.render(scene, tmp_path / "a.exr", uniform, 256, pbrt=pbrt, on_percent=seen.append)
+    assert r.image.is_file() and seen and seen[-1] == 100 and seen == sorted(seen)
+    bad = tmp_path / "bad.pbrt"
+    bad.write_text('WorldBegin\nShape "sphere" "float radius" [ oops ]\n')
+    for progress in (None, seen.append):
+        with pytest.raises(rendering.RenderError, match=r"bad\.pbrt:2"):
+            rendering.render(bad, tmp_path / "b.exr", uniform, 4, pbrt=pbrt, on_percent=progress)

@@ -114,7 +114,9 @@ def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Con
     say(f"ground truth: {config.truth_method}, {config.truth_spp} spp")
     gt = rendering.render(ev.scene, outdir / "renders" / f"truth-{config.truth_method}-{config.truth_spp}.exr",
                           samplers[config.truth_method], config.truth_spp,
-                          seed=10_000 + config.seed, nthreads=config.nthreads, pbrt=config.pbrt)
+                          seed=10_000 + config.seed, nthreads=config.nthreads, pbrt=config.pbrt,
+                          on_percent=lambda pct: say(f"ground truth: {config.truth_method}, "
+                                                     f"{config.truth_spp} spp, {pct}%"))
     ev.truth, ev.truth_seconds = gt.image, gt.seconds
     truth = read_rgb(gt.image)
     name = scene_name or Path(scene).parent.name or Path(scene).stem

@@ -8,10 +8,12 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 REPO = Path(__file__).resolve().parents[3]
 DEFAULT_PBRT = REPO / "build" / "pbrt"
@@ -58,12 +60,42 @@ def file_digest(*paths: Path, extra: str = "") -> str:
     return h.hexdigest()[:16]
 
 
+def _run(cmd: list[str], on_percent: Callable[[int], None] | None) -> tuple[int, str]:
+    """Run the renderer; returns its exit status and stderr (without progress-bar lines).
+
+    With ``on_percent``, the renderer draws its progress bar ("... [+++   ]  37% ...") on
+    stderr, which is read as it comes and reported as percentages."""
+    if on_percent is None:
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        return proc.returncode, proc.stderr
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    kept, pending = [], b""
+    assert proc.stderr is not None
+    while chunk := proc.stderr.read1(4096):
+        *lines, pending = re.split(rb"[\r\n]", pending + chunk)
+        for line in lines:
+            m = _PERCENT.search(line)
+            if m:
+                on_percent(int(m[1]))
+            elif line.strip():
+                kept.append(line.decode(errors="replace"))
+    if pending.strip() and not _PERCENT.search(pending):
+        kept.append(pending.decode(errors="replace"))
+    return proc.wait(), "\n".join(kept)
+
+
+#: The percentage in a line of the renderer's progress bar.
+_PERCENT = re.compile(rb"\]\s+(\d+)%")
+
+
 def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
-           nthreads: int | None = None, pbrt: Path = DEFAULT_PBRT, cache: bool = True) -> Render:
+           nthreads: int | None = None, pbrt: Path = DEFAULT_PBRT, cache: bool = True,
+           on_percent: Callable[[int], None] | None = None) -> Render:
     """Render ``scene`` to ``out`` (EXR) unless an identical render is already there.
 
     A JSON file beside the image records the inputs' digest and the render time, so a rerun
     with the same scene, table, binary, sampler, spp and seed reuses it (resumable grids).
+    ``on_percent`` follows a long render's progress (0-100).
     """
     out = Path(out)
     meta = out.with_suffix(".json")
@@ -74,16 +106,16 @@ def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
         if m.get("key") == key:
             return Render(out, float(m["seconds"]))
     out.parent.mkdir(parents=True, exist_ok=True)
-    cmd = [str(pbrt), "--quiet", "--spp", str(spp), "--seed", str(seed), *sampler.args,
-           "--outfile", str(out)]
+    cmd = [str(pbrt), *([] if on_percent else ["--quiet"]), "--spp", str(spp), "--seed", str(seed),
+           *sampler.args, "--outfile", str(out)]
     if nthreads:
         cmd += ["--nthreads", str(nthreads)]
     cmd.append(str(scene))
     start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    status, stderr = _run(cmd, on_percent)
     seconds = time.perf_counter() - start
-    if proc.returncode != 0 or not out.is_file():
-        raise RenderError(f"{' '.join(cmd)} failed (exit {proc.returncode}):\n{proc.stderr.strip()}")
+    if status != 0 or not out.is_file():
+        raise RenderError(f"{' '.join(cmd)} failed (exit {status}):\n{stderr.strip()}")
     meta.write_text(json.dumps({"key": key, "seconds": seconds, "command": cmd,
                                 "cpus": os.cpu_count()}, indent=1))
     return Render(out, seconds)
