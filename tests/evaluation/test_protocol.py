@@ -126,11 +126,11 @@ def test_ratio_error_matches_the_spread_of_simulated_seeds() -> None:
     assert r == 4.0 and err == pytest.approx(ratios.std(), rel=0.05)
 
 
-def test_copy_report_keeps_links_and_leaves_renders(tmp_path) -> None:
+def test_copy_report_keeps_links_and_leaves_renders_and_spectra(tmp_path) -> None:
     out = tmp_path / "out"
     (out / "a" / "b" / "renders").mkdir(parents=True)
     for f in ("report.md", "results.csv", "summary.png", "a/b/colour-bar.png", "a/b/renders/x.exr",
-              "a/b/renders/x.png", "a/b/table.csv"):
+              "a/b/renders/x.png", "a/b/table.csv", "a/b/densities.png"):
         (out / f).write_text(f)
     copied = commands.copy_report(out, tmp_path / "docs")
     assert sorted(p.relative_to(tmp_path / "docs").as_posix() for p in copied) == \

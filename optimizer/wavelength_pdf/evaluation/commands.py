@@ -266,8 +266,10 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
     copied = []
     for f in sorted(outdir.rglob("*")):
         rel = f.relative_to(outdir)
+        # densities.png draws the lamp spectrum itself, which may be licensed data (LSPDD
+        # spectra must not be redistributed); the report does not link it.
         if f.is_file() and (f.suffix == ".png" or rel.as_posix() in ("report.md", "results.csv")) \
-                and "renders" not in rel.parts:
+                and "renders" not in rel.parts and f.name != "densities.png":
             (dest / rel).parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(f, dest / rel)
             copied.append(dest / rel)

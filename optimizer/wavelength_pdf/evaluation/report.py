@@ -113,7 +113,9 @@ def plot_error_maps(maps: dict[tuple[str, int], np.ndarray], path: Path, title: 
     methods = list(dict.fromkeys(m for m, _ in maps))
     spps = sorted({s for _, s in maps})
     vmax = max(float(np.percentile(e, 99)) for e in maps.values())
-    fig, axes = plt.subplots(len(methods), len(spps), figsize=(2.4 * len(spps) + 1, 2.4 * len(methods)),
+    height, width = next(iter(maps.values())).shape[:2]
+    panel = 2.4 * height / width + 0.3  # the image's aspect plus room for the panel's title
+    fig, axes = plt.subplots(len(methods), len(spps), figsize=(2.4 * len(spps) + 1, panel * len(methods) + 0.4),
                              squeeze=False, constrained_layout=True)
     im = None
     for i, m in enumerate(methods):
@@ -122,7 +124,7 @@ def plot_error_maps(maps: dict[tuple[str, int], np.ndarray], path: Path, title: 
             ax.set_xticks([])
             ax.set_yticks([])
             if (m, s) in maps:
-                im = ax.imshow(maps[(m, s)], cmap="inferno", vmin=0.0, vmax=vmax)
+                im = ax.imshow(maps[(m, s)], cmap="inferno", vmin=0.0, vmax=vmax, interpolation="nearest")
                 ax.set_title(f"{m}, {s} spp: {maps[(m, s)].mean():.2f}", fontsize=8)
     if im is not None:
         fig.colorbar(im, ax=axes, shrink=0.8, label="CIEDE2000")
