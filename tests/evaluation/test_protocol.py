@@ -132,6 +132,8 @@ def test_copy_report_keeps_links_and_leaves_renders_and_spectra(tmp_path) -> Non
     for f in ("report.md", "results.csv", "summary.png", "a/b/colour-bar.png", "a/b/renders/x.exr",
               "a/b/renders/x.png", "a/b/table.csv", "a/b/densities.png"):
         (out / f).write_text(f)
+    # as write_report links them: the summary, then each job's plots
+    (out / "report.md").write_text("# r\n\n![summary](summary.png)\n\n## a\n\n![colour bar](a/b/colour-bar.png)\n")
     copied = commands.copy_report(out, tmp_path / "docs")
     assert sorted(p.relative_to(tmp_path / "docs").as_posix() for p in copied) == \
         ["a/b/colour-bar.png", "report.md", "results.csv", "summary.png"]

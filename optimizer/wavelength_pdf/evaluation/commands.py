@@ -261,18 +261,16 @@ def cmd_published(args) -> int:
 
 
 def copy_report(outdir: Path, dest: Path) -> list[Path]:
-    """Copy a grid's report.md, results.csv and plots (PNG) to ``dest``, keeping the folder
-    layout so that the report's relative links still resolve; renders stay behind."""
+    """Copy a grid's report.md, results.csv and the images the report shows to ``dest``,
+    keeping the folder layout so that the report's relative links still resolve. Nothing else
+    goes: not the renders, not the tables, and not densities.png, which draws the lamp spectrum
+    itself (licensed data such as the LSPDD spectra must not be redistributed)."""
+    names = ["report.md", "results.csv", *report.report_images(outdir / "report.md")]
     copied = []
-    for f in sorted(outdir.rglob("*")):
-        rel = f.relative_to(outdir)
-        # densities.png draws the lamp spectrum itself, which may be licensed data (LSPDD
-        # spectra must not be redistributed); the report does not link it.
-        if f.is_file() and (f.suffix == ".png" or rel.as_posix() in ("report.md", "results.csv")) \
-                and "renders" not in rel.parts and f.name != "densities.png":
-            (dest / rel).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(f, dest / rel)
-            copied.append(dest / rel)
+    for name in sorted(names):
+        (dest / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(outdir / name, dest / name)
+        copied.append(dest / name)
     return copied
 
 

@@ -6,12 +6,14 @@
 - :func:`plot_error`: mean error against spp and against seconds, log-log, one line a method.
 - :func:`plot_error_maps`: false-colour per-pixel CIEDE2000 maps, one panel an image.
 - :func:`plot_summary`: error against spp and against seconds for many jobs, one row a job.
-- :func:`write_report`: a Markdown report of a grid, with every job's plots and colour bar.
+- :func:`write_report`: a Markdown report of a grid, with every job's plots and colour bar;
+  :func:`report_images` lists the files it shows.
 """
 from __future__ import annotations
 
 import math
 import os
+import re
 from collections import defaultdict
 from pathlib import Path
 from typing import Sequence
@@ -184,3 +186,12 @@ def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row
                   f"![error against spp and time]({rel(folder / 'error-vs-spp-and-time.png')})", "",
                   f"![error maps]({rel(folder / 'error-maps.png')})", ""]
     path.write_text("\n".join(lines))
+
+
+#: An image link as :func:`write_report` writes it: ``![label](relative/path)``.
+_IMAGE_LINK = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def report_images(path: Path) -> list[str]:
+    """The images a report written by :func:`write_report` shows, as paths relative to it."""
+    return list(dict.fromkeys(_IMAGE_LINK.findall(Path(path).read_text())))
