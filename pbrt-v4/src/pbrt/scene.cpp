@@ -1,8 +1,8 @@
 #include <pbrt/scene.h>
 
-#include <pbrt/color.h>
-#include <pbrt/paramdict.h>
 #include <pbrt/parser.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/paramdict.h>
 #include <pbrt/wavelength_coverage.h>
 
 #include <cctype>

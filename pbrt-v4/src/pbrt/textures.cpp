@@ -1,7 +1,7 @@
 #include <pbrt/textures.h>
 
-#include <pbrt/color.h>
-#include <pbrt/image.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/image.h>
 
 #include <algorithm>
 #include <cmath>

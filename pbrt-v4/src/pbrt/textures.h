@@ -14,8 +14,8 @@
 // footprint; the difference is confined to a sub-pixel band along the checker edges).
 #pragma once
 
-#include <pbrt/spectrum.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 
 #include <memory>
 #include <string>

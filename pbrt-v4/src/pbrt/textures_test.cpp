@@ -3,9 +3,9 @@
 // clear error for a missing file (directly and from a scene file); plus the bump mapping
 // of a "displacement" texture against the analytic normal of a tilted plane.
 #include <pbrt/bumpmap.h>
-#include <pbrt/image.h>
 #include <pbrt/test_util.h>
 #include <pbrt/textures.h>
+#include <pbrt/util/image.h>
 
 #include <gtest/gtest.h>
 

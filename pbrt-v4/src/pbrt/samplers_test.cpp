@@ -1,5 +1,5 @@
 // Pixel samplers: stratification properties, determinism and uniformity.
-#include <pbrt/sampler.h>
+#include <pbrt/samplers.h>
 
 #include <gtest/gtest.h>
 

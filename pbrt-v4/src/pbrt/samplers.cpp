@@ -1,4 +1,4 @@
-#include <pbrt/sampler.h>
+#include <pbrt/samplers.h>
 
 #include <array>
 

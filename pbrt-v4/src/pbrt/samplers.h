@@ -13,8 +13,8 @@
 //                                    "Practical Hash-based Owen Scrambling", JCGT 9(4))
 #pragma once
 
-#include <pbrt/rng.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/rng.h>
+#include <pbrt/util/vecmath.h>
 
 #include <cstdint>
 #include <string>
