@@ -9,9 +9,9 @@ set(_rgb2spec_src ${CMAKE_CURRENT_LIST_DIR}/../src)
 add_executable(rgb2spec_opt
   ${_rgb2spec_src}/tools/rgb2spec_opt.cpp
   ${_rgb2spec_src}/pbrt/pbrt.cpp
-  ${_rgb2spec_src}/pbrt/cie_data.cpp
-  ${_rgb2spec_src}/pbrt/spectrum.cpp
-  ${_rgb2spec_src}/pbrt/color.cpp)
+  ${_rgb2spec_src}/pbrt/util/cie_data.cpp
+  ${_rgb2spec_src}/pbrt/util/spectrum.cpp
+  ${_rgb2spec_src}/pbrt/util/color.cpp)
 target_include_directories(rgb2spec_opt PRIVATE ${_rgb2spec_src})
 target_link_libraries(rgb2spec_opt PRIVATE Threads::Threads)
 # Optimized even in Debug builds: the tool's run time is part of every clean build.

@@ -5,7 +5,7 @@
 
 #include <pbrt/interaction.h>
 #include <pbrt/shapes.h>
-#include <pbrt/transform.h>
+#include <pbrt/util/transform.h>
 
 #include <memory>
 #include <vector>

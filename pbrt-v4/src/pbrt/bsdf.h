@@ -5,9 +5,9 @@
 
 #include <pbrt/bxdf.h>
 #include <pbrt/bxdfs.h>
-#include <pbrt/sampling.h>
-#include <pbrt/spectrum.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/sampling.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 
 #include <optional>
 #include <variant>

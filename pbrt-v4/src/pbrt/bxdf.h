@@ -3,9 +3,9 @@
 // diffuse layer). bsdf.h collects the BxDFs into one variant.
 #pragma once
 
-#include <pbrt/sampling.h>
-#include <pbrt/spectrum.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/sampling.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 
 #include <optional>
 

@@ -1,6 +1,6 @@
 #include <pbrt/bxdfs.h>
 
-#include <pbrt/rng.h>
+#include <pbrt/util/rng.h>
 
 #include <cmath>
 #include <cstring>

@@ -21,8 +21,8 @@
 #include <pbrt/fresnel.h>
 #include <pbrt/microfacet.h>
 #include <pbrt/phase.h>
-#include <pbrt/spectrum.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 
 #include <cstdint>
 #include <optional>

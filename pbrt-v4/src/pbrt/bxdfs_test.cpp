@@ -13,8 +13,8 @@
 #include <pbrt/fresnel.h>
 #include <pbrt/microfacet.h>
 #include <pbrt/phase.h>
-#include <pbrt/rng.h>
-#include <pbrt/sampling.h>
+#include <pbrt/util/rng.h>
+#include <pbrt/util/sampling.h>
 
 #include <gtest/gtest.h>
 

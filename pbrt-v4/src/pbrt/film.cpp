@@ -1,6 +1,6 @@
 #include <pbrt/film.h>
 
-#include <pbrt/paramdict.h>
+#include <pbrt/util/paramdict.h>
 
 #include <cmath>
 

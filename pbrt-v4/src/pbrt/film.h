@@ -9,10 +9,10 @@
 // "gbuffer" and "spectral" films are rendered as "rgb" with a warning.
 #pragma once
 
-#include <pbrt/color.h>
-#include <pbrt/image.h>
 #include <pbrt/sensor.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/image.h>
+#include <pbrt/util/vecmath.h>
 
 #include <limits>
 #include <memory>

@@ -5,8 +5,8 @@
 // ed., sections 9.3 (specular reflection/refraction) and 9.5 (Fresnel equations).
 #pragma once
 
-#include <pbrt/spectrum.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 
 #include <complex>
 

@@ -1,9 +1,9 @@
 #include <pbrt/integrator.h>
 
 #include <pbrt/materials.h>
-#include <pbrt/paramdict.h>
-#include <pbrt/sampler.h>
+#include <pbrt/samplers.h>
 #include <pbrt/scene.h>
+#include <pbrt/util/paramdict.h>
 
 namespace pbrt {
 

@@ -8,7 +8,7 @@
 #pragma once
 
 #include <pbrt/ray.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/spectrum.h>
 
 #include <string>
 

@@ -2,7 +2,7 @@
 #pragma once
 
 #include <pbrt/ray.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 namespace pbrt {
 

@@ -1,7 +1,7 @@
 #include <pbrt/lights.h>
 
-#include <pbrt/color.h>
-#include <pbrt/paramdict.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/paramdict.h>
 
 #include <algorithm>
 #include <cmath>

@@ -11,10 +11,10 @@
 #pragma once
 
 #include <pbrt/interaction.h>
-#include <pbrt/sampling.h>
 #include <pbrt/shapes.h>
-#include <pbrt/spectrum.h>
-#include <pbrt/transform.h>
+#include <pbrt/util/sampling.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/transform.h>
 
 #include <memory>
 #include <optional>

@@ -4,8 +4,8 @@
 // "power" / "illuminance" it is given).
 #include <pbrt/lights.h>
 
-#include <pbrt/rng.h>
 #include <pbrt/test_util.h>
+#include <pbrt/util/rng.h>
 
 #include <gtest/gtest.h>
 

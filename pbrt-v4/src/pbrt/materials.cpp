@@ -1,7 +1,7 @@
 #include <pbrt/materials.h>
 
 #include <pbrt/bumpmap.h>
-#include <pbrt/paramdict.h>
+#include <pbrt/util/paramdict.h>
 
 namespace pbrt {
 

@@ -70,15 +70,6 @@ using Material = std::variant<DiffuseMaterial, InterfaceMaterial, ConductorMater
 std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
                             SampledWavelengths &lambda, const std::function<Float()> &uFresh);
 
-// How a material's parameters become textures (implemented by the scene builder, which
-// knows the named textures and the current colour space). Both return nullptr when the
-// parameter is absent and there is no default.
-struct TextureResolver {
-    std::function<SpectrumTextureHandle(const std::string &name, SpectrumHandle def, SpectrumType)>
-        spectrum;
-    std::function<FloatTextureHandle(const std::string &name, std::optional<Float> def)> floats;
-};
-
 // Creates a material of the given type ("string type" of MakeNamedMaterial, or the name
 // in Material). Throws PbrtError at loc for unsupported types and parameters. seed feeds
 // the random walks of "coateddiffuse" (the --seed option; pbrt-v4 hashes its seed too).

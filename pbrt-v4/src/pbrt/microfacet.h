@@ -10,8 +10,8 @@
 // section 9.6.
 #pragma once
 
-#include <pbrt/sampling.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/sampling.h>
+#include <pbrt/util/vecmath.h>
 
 #include <algorithm>
 #include <cmath>

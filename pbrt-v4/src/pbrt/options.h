@@ -2,7 +2,7 @@
 // fills it from kebab-case flags).
 #pragma once
 
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 #include <cstdint>
 #include <optional>

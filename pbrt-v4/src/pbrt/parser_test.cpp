@@ -1,5 +1,5 @@
-#include <pbrt/test_tempdir.h>
 #include <pbrt/parser.h>
+#include <pbrt/test_tempdir.h>
 
 #include <gtest/gtest.h>
 

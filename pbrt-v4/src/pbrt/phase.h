@@ -5,7 +5,7 @@
 // exactly p (the distribution is normalized over the sphere).
 #pragma once
 
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 #include <cmath>
 #include <optional>

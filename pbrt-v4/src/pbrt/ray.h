@@ -1,7 +1,7 @@
 // A ray: origin, direction (not necessarily normalized) and the largest parametric distance.
 #pragma once
 
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 namespace pbrt {
 

@@ -1,7 +1,7 @@
 #include <pbrt/render.h>
 
-#include <pbrt/progress.h>
 #include <pbrt/scene.h>
+#include <pbrt/util/progress.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>

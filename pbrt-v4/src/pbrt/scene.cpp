@@ -1,8 +1,8 @@
 #include <pbrt/scene.h>
 
-#include <pbrt/color.h>
-#include <pbrt/paramdict.h>
 #include <pbrt/parser.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/paramdict.h>
 #include <pbrt/wavelength_coverage.h>
 
 #include <cctype>
@@ -363,7 +363,7 @@ class SceneBuilder : public ParserTarget {
     std::map<std::string, int> namedMaterials;
     std::map<std::string, FloatTextureHandle> floatTextures;
     std::map<std::string, SpectrumTextureHandle> albedoTextures, unboundedTextures;
-    std::map<std::string, std::shared_ptr<const TextureImage>> textureImages;
+    TextureImageCache textureImages;
     std::map<std::string, int> objects;
     std::vector<PendingInstance> instances;
     int currentObject = 0;
@@ -479,101 +479,15 @@ void SceneBuilder::Texture(const std::string &name, const std::string &type,
         throw PbrtError(loc, "texture \"" + name + "\" redefined");
     ParameterDictionary dict(Concat(std::move(params), graphicsState.textureAttributes));
     const RGBColorSpace &cs = *graphicsState.colorSpace;
-    TextureResolver res = Resolver(dict, cs);
-
-    // The uv mapping shared by the 2D textures.
-    auto mapping = [&] {
-        std::string m = dict.GetOneString("mapping", "uv");
-        if (m != "uv") throw PbrtError(dict.Loc("mapping"), "texture mapping \"" + m + "\" is not supported (only uv)");
-        return UVMapping{dict.GetOneFloat("uscale", 1), dict.GetOneFloat("vscale", 1),
-                         dict.GetOneFloat("udelta", 0), dict.GetOneFloat("vdelta", 0)};
-    };
-    auto dimension = [&] {
-        int d = dict.GetOneInt("dimension", 2);
-        if (d != 2 && d != 3) throw PbrtError(dict.Loc("dimension"), "checkerboard dimension must be 2 or 3");
-        return d;
-    };
-    auto unsupported = [&] {
-        throw PbrtError(loc, "texture class \"" + texname +
-                                 "\" is not supported yet (supported: constant, checkerboard, scale, mix, imagemap)");
-    };
-    // "imagemap": the image (cached per file, encoding and wrap mode) and its parameters.
-    std::shared_ptr<const TextureImage> image;
-    Float imageScale = 1;
-    bool imageInvert = false;
-    if (texname == "imagemap") {
-        std::string filename = dict.GetOneString("filename", "");
-        if (filename.empty()) throw PbrtError(loc, "imagemap texture \"" + name + "\" needs a \"filename\"");
-        std::string path = ResolveFilename(filename, dict.Loc("filename"));
-        std::string ext = path.substr(path.find_last_of('.') == std::string::npos ? path.size() : path.find_last_of('.'));
-        for (char &c : ext) c = char(std::tolower((unsigned char)c));
-        bool floatFormat = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
-        std::string encoding = dict.GetOneString("encoding", floatFormat ? "linear" : "sRGB");
-        std::string wrapName = dict.GetOneString("wrap", "repeat");
-        TextureImage::Wrap wrap;
-        if (wrapName == "repeat") wrap = TextureImage::Wrap::Repeat;
-        else if (wrapName == "black") wrap = TextureImage::Wrap::Black;
-        else if (wrapName == "clamp") wrap = TextureImage::Wrap::Clamp;
-        else throw PbrtError(dict.Loc("wrap"), "texture wrap mode \"" + wrapName + "\" is not supported");
-        std::string filter = dict.GetOneString("filter", "bilinear");
-        if (filter != "bilinear" && filter != "point")
-            Warning(dict.Loc("filter"), "texture filter \"" + filter + "\" is rendered as \"bilinear\"");
-        dict.GetOneFloat("maxanisotropy", 8);
-        imageScale = dict.GetOneFloat("scale", 1);
-        imageInvert = dict.GetOneBool("invert", false);
-        std::string key = path + "|" + encoding + "|" + wrapName;
-        auto it = textureImages.find(key);
-        if (it == textureImages.end()) {
-            try {
-                it = textureImages.emplace(key, LoadTextureImage(path, encoding, wrap)).first;
-            } catch (const PbrtError &e) {
-                throw PbrtError(dict.Loc("filename"), e.what());
-            }
-        }
-        image = it->second;
-    }
-
-    if (type == "float") {
-        FloatTextureHandle t;
-        if (texname == "constant") t = MakeConstantFloatTexture(dict.GetOneFloat("value", 1));
-        else if (texname == "checkerboard") {
-            UVMapping m = mapping();
-            int d = dimension();
-            t = MakeCheckerboardFloatTexture(m, d, res.floats("tex1", 1), res.floats("tex2", 0));
-        } else if (texname == "scale") t = MakeScaleFloatTexture(res.floats("tex", 1), res.floats("scale", 1));
-        else if (texname == "mix")
-            t = MakeMixFloatTexture(res.floats("tex1", 0), res.floats("tex2", 1), res.floats("amount", 0.5f));
-        else if (texname == "imagemap") t = MakeImageFloatTexture(mapping(), image, imageScale, imageInvert);
-        else unsupported();
-        CheckUnused(dict, "Texture \"" + name + "\"");
-        floatTextures[name] = t;
-        return;
-    }
-    // Spectrum textures are made twice, as reflectance (clamped to [0, 1]) and unbounded,
-    // and the material parameter that uses one picks the flavour (as pbrt-v4 does).
-    for (SpectrumType st : {SpectrumType::Albedo, SpectrumType::Unbounded}) {
-        // Re-resolve parameters for this flavour; nested textures come from the same flavour.
-        TextureResolver r;
-        r.floats = res.floats;
-        r.spectrum = [&](const std::string &n, SpectrumHandle def, SpectrumType) {
-            return res.spectrum(n, def, st);
-        };
-        auto one = std::make_shared<ConstantSpectrum>(1.f), zero = std::make_shared<ConstantSpectrum>(0.f);
-        SpectrumTextureHandle t;
-        if (texname == "constant") t = r.spectrum("value", one, st);
-        else if (texname == "checkerboard") {
-            UVMapping m = mapping();
-            int d = dimension();
-            t = MakeCheckerboardSpectrumTexture(m, d, r.spectrum("tex1", one, st), r.spectrum("tex2", zero, st));
-        } else if (texname == "scale") t = MakeScaleSpectrumTexture(r.spectrum("tex", one, st), r.floats("scale", 1));
-        else if (texname == "mix")
-            t = MakeMixSpectrumTexture(r.spectrum("tex1", zero, st), r.spectrum("tex2", one, st), r.floats("amount", 0.5f));
-        else if (texname == "imagemap")
-            t = MakeImageSpectrumTexture(mapping(), image, imageScale, imageInvert, st, &cs);
-        else unsupported();
-        (st == SpectrumType::Albedo ? albedoTextures : unboundedTextures)[name] = t;
-    }
+    TextureDefinition t = CreateTexture(name, type, texname, dict, Resolver(dict, cs), cs,
+                                        &textureImages, loc);
     CheckUnused(dict, "Texture \"" + name + "\"");
+    if (type == "float") {
+        floatTextures[name] = t.floatTexture;
+    } else {
+        albedoTextures[name] = t.albedo;
+        unboundedTextures[name] = t.unbounded;
+    }
 }
 
 // --- Lights ------------------------------------------------------------------------------------
@@ -665,35 +579,8 @@ void SceneBuilder::EndOfFiles() {
 
     Desc samp = samplerDesc ? *samplerDesc : Desc{"zsobol", {}, FileLoc{}, nullptr};
     ParameterDictionary sampDict(samp.params);
-    uint64_t seed = 0;
-    if (optionSeed) seed = uint64_t(*optionSeed);
-    int samplerSeed = sampDict.GetOneInt("seed", int(seed));
-    seed = opts.seed ? *opts.seed : uint64_t(int64_t(samplerSeed));
-    int spp = sampDict.GetOneInt("pixelsamples", 16);
-    if (samp.name == "stratified") {
-        int xs = sampDict.GetOneInt("xsamples", 4), ys = sampDict.GetOneInt("ysamples", 4);
-        bool jitter = sampDict.GetOneBool("jitter", true);
-        if (opts.spp) {
-            // pbrt-v4: the most square factorization of the requested count.
-            int n = *opts.spp, div = int(std::sqrt(double(n)));
-            while (n % div) --div;
-            ys = n / div;
-            xs = n / ys;
-        }
-        if (xs < 1 || ys < 1) throw PbrtError(samp.loc, "stratified sampler: xsamples and ysamples must be >= 1");
-        scene->sampler = pbrt::Sampler(SamplerType::Stratified, xs * ys, seed, xs, ys, jitter);
-    } else {
-        if (opts.spp) spp = *opts.spp;
-        if (spp < 1) throw PbrtError(samp.loc, "\"pixelsamples\" must be at least 1");
-        if (samp.name == "independent")
-            scene->sampler = pbrt::Sampler(SamplerType::Independent, spp, seed);
-        else if (samp.name == "sobol" || samp.name == "zsobol" || samp.name == "paddedsobol" ||
-                 samp.name == "halton" || samp.name == "pmj02bn") {
-            sampDict.GetOneString("randomization", "");  // any scrambling converges alike
-            scene->sampler = pbrt::Sampler(SamplerType::Sobol, spp, seed);
-        } else
-            throw PbrtError(samp.loc, "Sampler \"" + samp.name + "\" is not supported");
-    }
+    scene->sampler = pbrt::Sampler::Create(samp.name, sampDict, optionSeed ? uint64_t(*optionSeed) : 0,
+                                           opts.seed, opts.spp, samp.loc);
     CheckUnused(sampDict, "Sampler \"" + samp.name + "\"");
 
     // pbrt-v4's default integrator is "volpath", which we render as "path" (no media).

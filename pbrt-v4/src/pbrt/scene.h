@@ -9,14 +9,14 @@
 #pragma once
 
 #include <pbrt/accel.h>
-#include <pbrt/camera.h>
+#include <pbrt/cameras.h>
 #include <pbrt/film.h>
-#include <pbrt/filter.h>
+#include <pbrt/filters.h>
 #include <pbrt/integrator.h>
 #include <pbrt/lights.h>
 #include <pbrt/materials.h>
 #include <pbrt/options.h>
-#include <pbrt/sampler.h>
+#include <pbrt/samplers.h>
 #include <pbrt/wavelengths.h>
 
 #include <memory>

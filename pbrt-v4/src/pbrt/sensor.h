@@ -8,8 +8,8 @@
 // colour space's RGB. Entries with pdf = 0 (terminated wavelengths) contribute 0.
 #pragma once
 
-#include <pbrt/color.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/spectrum.h>
 
 namespace pbrt {
 

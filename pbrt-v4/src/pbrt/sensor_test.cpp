@@ -1,7 +1,7 @@
 // Tests of the film sensor (pbrt-v4's "cie1931" sensor): Monte Carlo spectra to RGB.
-#include <pbrt/color.h>
 #include <pbrt/sensor.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/spectrum.h>
 #include <pbrt/wavelengths.h>
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 #include <pbrt/shapes.h>
 
-#include <pbrt/paramdict.h>
 #include <pbrt/parser.h>
-#include <pbrt/ply.h>
+#include <pbrt/util/paramdict.h>
+#include <pbrt/util/ply.h>
 
 #include <cmath>
 

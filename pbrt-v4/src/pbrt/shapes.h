@@ -10,8 +10,8 @@
 #pragma once
 
 #include <pbrt/interaction.h>
-#include <pbrt/transform.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/transform.h>
+#include <pbrt/util/vecmath.h>
 
 #include <array>
 #include <memory>

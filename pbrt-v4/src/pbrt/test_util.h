@@ -2,10 +2,10 @@
 // image (per-channel XYZ means with their standard errors).
 #pragma once
 
-#include <pbrt/color.h>
-#include <pbrt/image.h>
 #include <pbrt/render.h>
 #include <pbrt/scene.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/image.h>
 
 #include <algorithm>
 #include <cmath>

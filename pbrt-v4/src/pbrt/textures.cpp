@@ -1,9 +1,12 @@
 #include <pbrt/textures.h>
 
-#include <pbrt/color.h>
-#include <pbrt/image.h>
+#include <pbrt/parser.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/image.h>
+#include <pbrt/util/paramdict.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 namespace pbrt {
@@ -269,6 +272,105 @@ FloatTextureHandle MakeMixFloatTexture(FloatTextureHandle a, FloatTextureHandle 
 SpectrumTextureHandle MakeMixSpectrumTexture(SpectrumTextureHandle a, SpectrumTextureHandle b,
                                              FloatTextureHandle amt) {
     return std::make_shared<MixSpectrum>(std::move(a), std::move(b), std::move(amt));
+}
+
+// --- The factory -------------------------------------------------------------------------------
+TextureDefinition CreateTexture(const std::string &name, const std::string &type,
+                                const std::string &texname, const ParameterDictionary &dict,
+                                const TextureResolver &textures, const RGBColorSpace &colorSpace,
+                                TextureImageCache *images, const FileLoc &loc) {
+    // The uv mapping shared by the 2D textures.
+    auto mapping = [&] {
+        std::string m = dict.GetOneString("mapping", "uv");
+        if (m != "uv") throw PbrtError(dict.Loc("mapping"), "texture mapping \"" + m + "\" is not supported (only uv)");
+        return UVMapping{dict.GetOneFloat("uscale", 1), dict.GetOneFloat("vscale", 1),
+                         dict.GetOneFloat("udelta", 0), dict.GetOneFloat("vdelta", 0)};
+    };
+    auto dimension = [&] {
+        int d = dict.GetOneInt("dimension", 2);
+        if (d != 2 && d != 3) throw PbrtError(dict.Loc("dimension"), "checkerboard dimension must be 2 or 3");
+        return d;
+    };
+    auto unsupported = [&] {
+        throw PbrtError(loc, "texture class \"" + texname +
+                                 "\" is not supported yet (supported: constant, checkerboard, scale, mix, imagemap)");
+    };
+    // "imagemap": the image (cached per file, encoding and wrap mode) and its parameters.
+    std::shared_ptr<const TextureImage> image;
+    Float imageScale = 1;
+    bool imageInvert = false;
+    if (texname == "imagemap") {
+        std::string filename = dict.GetOneString("filename", "");
+        if (filename.empty()) throw PbrtError(loc, "imagemap texture \"" + name + "\" needs a \"filename\"");
+        std::string path = ResolveFilename(filename, dict.Loc("filename"));
+        std::string ext = path.substr(path.find_last_of('.') == std::string::npos ? path.size() : path.find_last_of('.'));
+        for (char &c : ext) c = char(std::tolower((unsigned char)c));
+        bool floatFormat = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+        std::string encoding = dict.GetOneString("encoding", floatFormat ? "linear" : "sRGB");
+        std::string wrapName = dict.GetOneString("wrap", "repeat");
+        TextureImage::Wrap wrap;
+        if (wrapName == "repeat") wrap = TextureImage::Wrap::Repeat;
+        else if (wrapName == "black") wrap = TextureImage::Wrap::Black;
+        else if (wrapName == "clamp") wrap = TextureImage::Wrap::Clamp;
+        else throw PbrtError(dict.Loc("wrap"), "texture wrap mode \"" + wrapName + "\" is not supported");
+        std::string filter = dict.GetOneString("filter", "bilinear");
+        if (filter != "bilinear" && filter != "point")
+            Warning(dict.Loc("filter"), "texture filter \"" + filter + "\" is rendered as \"bilinear\"");
+        dict.GetOneFloat("maxanisotropy", 8);
+        imageScale = dict.GetOneFloat("scale", 1);
+        imageInvert = dict.GetOneBool("invert", false);
+        std::string key = path + "|" + encoding + "|" + wrapName;
+        auto it = images->find(key);
+        if (it == images->end()) {
+            try {
+                it = images->emplace(key, LoadTextureImage(path, encoding, wrap)).first;
+            } catch (const PbrtError &e) {
+                throw PbrtError(dict.Loc("filename"), e.what());
+            }
+        }
+        image = it->second;
+    }
+
+    if (type == "float") {
+        FloatTextureHandle t;
+        if (texname == "constant") t = MakeConstantFloatTexture(dict.GetOneFloat("value", 1));
+        else if (texname == "checkerboard") {
+            UVMapping m = mapping();
+            int d = dimension();
+            t = MakeCheckerboardFloatTexture(m, d, textures.floats("tex1", 1), textures.floats("tex2", 0));
+        } else if (texname == "scale") t = MakeScaleFloatTexture(textures.floats("tex", 1), textures.floats("scale", 1));
+        else if (texname == "mix")
+            t = MakeMixFloatTexture(textures.floats("tex1", 0), textures.floats("tex2", 1), textures.floats("amount", 0.5f));
+        else if (texname == "imagemap") t = MakeImageFloatTexture(mapping(), image, imageScale, imageInvert);
+        else unsupported();
+        return {t, nullptr, nullptr};
+    }
+    // Spectrum textures are made twice, as reflectance (clamped to [0, 1]) and unbounded,
+    // and the material parameter that uses one picks the flavour (as pbrt-v4 does).
+    TextureDefinition result;
+    for (SpectrumType st : {SpectrumType::Albedo, SpectrumType::Unbounded}) {
+        // Re-resolve parameters for this flavour; nested textures come from the same flavour.
+        TextureResolver r;
+        r.floats = textures.floats;
+        r.spectrum = [&](const std::string &n, SpectrumHandle def, SpectrumType) {
+            return textures.spectrum(n, def, st);
+        };
+        auto one = std::make_shared<ConstantSpectrum>(1.f), zero = std::make_shared<ConstantSpectrum>(0.f);
+        SpectrumTextureHandle t;
+        if (texname == "constant") t = r.spectrum("value", one, st);
+        else if (texname == "checkerboard") {
+            UVMapping m = mapping();
+            int d = dimension();
+            t = MakeCheckerboardSpectrumTexture(m, d, r.spectrum("tex1", one, st), r.spectrum("tex2", zero, st));
+        } else if (texname == "scale") t = MakeScaleSpectrumTexture(r.spectrum("tex", one, st), r.floats("scale", 1));
+        else if (texname == "mix")
+            t = MakeMixSpectrumTexture(r.spectrum("tex1", zero, st), r.spectrum("tex2", one, st), r.floats("amount", 0.5f));
+        else if (texname == "imagemap")
+            t = MakeImageSpectrumTexture(mapping(), image, imageScale, imageInvert, st, &colorSpace);
+        else unsupported();
+        (st == SpectrumType::Albedo ? result.albedo : result.unbounded) = t;
+    }
+    return result;
 }
 
 }  // namespace pbrt

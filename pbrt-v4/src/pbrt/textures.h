@@ -14,16 +14,21 @@
 // footprint; the difference is confined to a sub-pixel band along the checker edges).
 #pragma once
 
-#include <pbrt/spectrum.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 
+#include <functional>
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace pbrt {
 
+class ParameterDictionary;
 class RGBColorSpace;
+struct FileLoc;
 
 // What a texture is evaluated at.
 struct TextureEvalContext {
@@ -101,6 +106,36 @@ FloatTextureHandle MakeImageFloatTexture(UVMapping map, std::shared_ptr<const Te
 SpectrumTextureHandle MakeImageSpectrumTexture(UVMapping map, std::shared_ptr<const TextureImage> image,
                                                Float scale, bool invert, SpectrumType type,
                                                const RGBColorSpace *colorSpace);
+
+// How a material's or texture's parameters become textures (implemented by the scene
+// builder, which knows the named textures and the current colour space). Both return
+// nullptr when the parameter is absent and there is no default.
+struct TextureResolver {
+    std::function<SpectrumTextureHandle(const std::string &name, SpectrumHandle def, SpectrumType)>
+        spectrum;
+    std::function<FloatTextureHandle(const std::string &name, std::optional<Float> def)> floats;
+};
+
+// The images of "imagemap" textures, loaded once per file, encoding and wrap mode.
+using TextureImageCache = std::map<std::string, std::shared_ptr<const TextureImage>>;
+
+// What a "Texture" directive defines: a float texture, or a spectrum texture made twice, as
+// reflectance (clamped to [0, 1]) and unbounded; the material parameter that uses one picks
+// the flavour (as pbrt-v4 does).
+struct TextureDefinition {
+    FloatTextureHandle floatTexture;
+    SpectrumTextureHandle albedo, unbounded;
+};
+
+// Creates the texture of class texname ("constant", "checkerboard", ...; see the top of
+// this file) named name, of type "float" or "spectrum" (checked by the caller). Texture-
+// valued parameters come from textures (for a spectrum texture, from the flavour being
+// made); RGB values are in colorSpace; relative image file names are resolved against the
+// scene file. Throws PbrtError at loc or at the parameter for what is not supported.
+TextureDefinition CreateTexture(const std::string &name, const std::string &type,
+                                const std::string &texname, const ParameterDictionary &params,
+                                const TextureResolver &textures, const RGBColorSpace &colorSpace,
+                                TextureImageCache *images, const FileLoc &loc);
 
 // Whether the 2D (dimension 2, from st) or 3D (from p) checkerboard picks tex1 at ctx.
 bool CheckerboardPicksFirst(const UVMapping &map, int dimension, const TextureEvalContext &ctx);

@@ -3,9 +3,10 @@
 // clear error for a missing file (directly and from a scene file); plus the bump mapping
 // of a "displacement" texture against the analytic normal of a tilted plane.
 #include <pbrt/bumpmap.h>
-#include <pbrt/image.h>
 #include <pbrt/test_util.h>
 #include <pbrt/textures.h>
+#include <pbrt/util/image.h>
+#include <pbrt/util/paramdict.h>
 
 #include <gtest/gtest.h>
 
@@ -194,5 +195,64 @@ TEST(Textures, BumpMapOfALinearRampTiltsTheNormal) {
         si.n = si.ns = Normal3f(0, 0, -1);
         b = BumpMap(*disp, si);
         EXPECT_LT(b.ns.z, 0) << "k " << k;
+    }
+}
+
+namespace {
+ParsedParameter FloatParam(const std::string &name, double v) {
+    ParsedParameter p;
+    p.type = "float";
+    p.name = name;
+    p.floats = {v};
+    return p;
+}
+}  // namespace
+
+TEST(Textures, CreateTextureResolvesParametersAndBothSpectrumFlavours) {
+    const FileLoc loc{"scene.pbrt", 12, 1};
+    // A resolver that knows three float constants and records the flavour of each spectrum lookup.
+    std::vector<SpectrumType> flavours;
+    TextureResolver res;
+    res.floats = [](const std::string &name, std::optional<Float> def) -> FloatTextureHandle {
+        if (name == "tex") return MakeConstantFloatTexture(2);
+        if (name == "scale") return MakeConstantFloatTexture(3);
+        return def ? MakeConstantFloatTexture(*def) : nullptr;
+    };
+    res.spectrum = [&](const std::string &, SpectrumHandle def, SpectrumType t) -> SpectrumTextureHandle {
+        flavours.push_back(t);
+        return MakeConstantSpectrumTexture(def);
+    };
+    TextureImageCache images;
+    TextureEvalContext ctx{{0, 0, 0}, {0.25f, 0.25f}};
+
+    TextureDefinition scale = CreateTexture("s", "float", "scale", ParameterDictionary(), res,
+                                            *RGBColorSpace::sRGB, &images, loc);
+    ASSERT_TRUE(scale.floatTexture);
+    EXPECT_FLOAT_EQ(scale.floatTexture->Evaluate(ctx), 6.f);
+    EXPECT_FALSE(scale.albedo || scale.unbounded);
+
+    ParameterDictionary constant({FloatParam("value", 0.75)});
+    EXPECT_FLOAT_EQ(CreateTexture("c", "float", "constant", constant, res, *RGBColorSpace::sRGB, &images, loc)
+                        .floatTexture->Evaluate(ctx), 0.75f);
+    EXPECT_TRUE(constant.Unused().empty()) << "\"value\" is looked up";
+
+    // A spectrum texture is made as reflectance and as unbounded; its parameters are
+    // resolved in the flavour being made.
+    TextureDefinition mix = CreateTexture("m", "spectrum", "mix", ParameterDictionary(), res,
+                                          *RGBColorSpace::sRGB, &images, loc);
+    ASSERT_TRUE(mix.albedo && mix.unbounded);
+    EXPECT_FALSE(mix.floatTexture);
+    EXPECT_EQ(flavours, (std::vector<SpectrumType>{SpectrumType::Albedo, SpectrumType::Albedo,
+                                                   SpectrumType::Unbounded, SpectrumType::Unbounded}));
+    SampledWavelengths lambda = SampledWavelengths::SampleUniform(0.5f, 360, 830);
+    // mix of tex1 = 0 and tex2 = 1 with amount 0.5.
+    EXPECT_FLOAT_EQ(mix.albedo->Evaluate(ctx, lambda)[0], 0.5f);
+
+    try {
+        CreateTexture("f", "float", "fbm", ParameterDictionary(), res, *RGBColorSpace::sRGB, &images, loc);
+        FAIL() << "an unsupported texture class was accepted";
+    } catch (const PbrtError &e) {
+        EXPECT_NE(std::string(e.what()).find("scene.pbrt:12"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("fbm"), std::string::npos) << e.what();
     }
 }

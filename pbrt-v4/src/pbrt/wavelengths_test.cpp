@@ -1,5 +1,5 @@
 // Tests of the wavelength sampling triples, SampledWavelengths and WavelengthSampler.
-#include <pbrt/spectrum.h>
+#include <pbrt/util/spectrum.h>
 #include <pbrt/wavelengths.h>
 
 #include <gtest/gtest.h>

@@ -20,8 +20,8 @@
 //
 // Usage: rgb2spec_opt <colour space> <output.cpp> [--threads N]
 
-#include <pbrt/color.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/spectrum.h>
 
 #include <algorithm>
 #include <atomic>
@@ -286,7 +286,7 @@ bool WriteTable(const std::string &path, const std::string &space, const std::ve
                  "// GENERATED at build time by src/tools/rgb2spec_opt.cpp for colour space \"%s\";\n"
                  "// do not edit. Sigmoid-polynomial coefficients (Jakob and Hanika 2019), %d^3 grid\n"
                  "// per largest component; largest CIELAB error of a solved grid point: %.3g.\n"
-                 "#include <pbrt/color.h>\n\nnamespace pbrt {\nnamespace {\n\n",
+                 "#include <pbrt/util/color.h>\n\nnamespace pbrt {\nnamespace {\n\n",
                  space.c_str(), kRes, stats.maxError);
     std::fprintf(f, "const float zNodes[%d] = {\n", kRes);
     for (int k = 0; k < kRes; ++k)

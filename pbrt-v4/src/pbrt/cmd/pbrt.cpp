@@ -30,7 +30,7 @@ Wavelengths (four per path from one random number):
   --wavelength-sampling NAME   visible  pbrt-v4's visible sampling over 360-830 nm (default)
                                uniform  stratified uniform over --wavelength-range
   --wavelength-range LO HI     range of uniform sampling in nm (default 360 830)
-  --wavelength-pdf FILE        sample from a wavelength table (SPEC sections 1, 2: four
+  --wavelength-pdf FILE        sample from a wavelength table (design §1, §2: four
                                densities on one grid, one u per path, balance heuristic);
                                a bad table stops pbrt before rendering (FILE:LINE: reason)
   --wavelength-pdf-defensive S mix a uniform share S in [0, 1] into each density of the
@@ -38,7 +38,8 @@ Wavelengths (four per path from one random number):
                                sampling density where a light emits, which biases the image
 Other:
   --quiet                      no progress bar or summary
-  --help                       this text
+  --version                    the version of pbrt (the project's) and exit
+  -h, --help                   this text and exit
 )";
 
 [[noreturn]] void Usage(const std::string &msg) {
@@ -75,7 +76,10 @@ int main(int argc, char **argv) {
     for (int i = 1; i < argc; ++i) {
         std::string arg = argv[i];
         if (arg.size() < 2 || arg.compare(0, 2, "--") != 0 || arg == "--") {
-            if (arg == "-h") Usage("");
+            if (arg == "-h") {
+                std::fputs(kUsage, stdout);
+                return 0;
+            }
             if (!arg.empty() && arg[0] == '-' && arg != "-") Usage("unknown option \"" + arg + "\"");
             files.push_back(arg);
             continue;
@@ -94,6 +98,10 @@ int main(int argc, char **argv) {
         };
         if (flag == "--help") {
             std::fputs(kUsage, stdout);
+            return 0;
+        } else if (flag == "--version") {
+            std::printf("pbrt (wavelength-pdf) %s: a pbrt-v4-compatible spectral path tracer\n",
+                        PBRT_PROJECT_VERSION);
             return 0;
         } else if (flag == "--quiet") {
             opts.quiet = true;

@@ -1,4 +1,4 @@
-#include <pbrt/transform.h>
+#include <pbrt/util/transform.h>
 
 #include <cmath>
 #include <cstdio>

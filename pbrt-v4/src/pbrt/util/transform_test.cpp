@@ -1,9 +1,9 @@
 // Transforms: pbrt's conventions (column-major file matrices, LookAt's camera frame) and
 // inverses.
-#include <pbrt/transform.h>
+#include <pbrt/util/transform.h>
 
-#include <pbrt/camera.h>
-#include <pbrt/rng.h>
+#include <pbrt/cameras.h>
+#include <pbrt/util/rng.h>
 
 #include <gtest/gtest.h>
 

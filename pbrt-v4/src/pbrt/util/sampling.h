@@ -4,7 +4,7 @@
 // The mappings are the standard published ones (see the pbrt book, 4th edition, ch. A.5).
 #pragma once
 
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 #include <array>
 #include <vector>

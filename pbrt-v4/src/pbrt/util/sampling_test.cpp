@@ -1,8 +1,8 @@
 // Sampling routines as sample / pdf / invert triples: every sample maps back to its u
 // (round trip), its pdf integrates to 1 over the domain, and sample histograms follow pdf.
-#include <pbrt/sampling.h>
+#include <pbrt/util/sampling.h>
 
-#include <pbrt/rng.h>
+#include <pbrt/util/rng.h>
 
 #include <gtest/gtest.h>
 

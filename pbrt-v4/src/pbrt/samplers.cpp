@@ -1,6 +1,9 @@
-#include <pbrt/sampler.h>
+#include <pbrt/samplers.h>
+
+#include <pbrt/util/paramdict.h>
 
 #include <array>
+#include <cmath>
 
 namespace pbrt {
 
@@ -49,6 +52,36 @@ const std::array<std::array<uint32_t, 256>, 4> kSobolDim1 = MakeSobolDim1Tables(
 Float ToUnitFloat(uint32_t v) { return std::min<Float>(v * 0x1p-32f, OneMinusEpsilon); }
 
 }  // namespace
+
+Sampler Sampler::Create(const std::string &name, const ParameterDictionary &params,
+                        uint64_t defaultSeed, std::optional<uint64_t> seedOverride,
+                        std::optional<int> sppOverride, const FileLoc &loc) {
+    int samplerSeed = params.GetOneInt("seed", int(defaultSeed));
+    uint64_t seed = seedOverride ? *seedOverride : uint64_t(int64_t(samplerSeed));
+    int spp = params.GetOneInt("pixelsamples", 16);
+    if (name == "stratified") {
+        int xs = params.GetOneInt("xsamples", 4), ys = params.GetOneInt("ysamples", 4);
+        bool jitter = params.GetOneBool("jitter", true);
+        if (sppOverride) {
+            // pbrt-v4: the most square factorization of the requested count.
+            int n = *sppOverride, div = int(std::sqrt(double(n)));
+            while (n % div) --div;
+            ys = n / div;
+            xs = n / ys;
+        }
+        if (xs < 1 || ys < 1) throw PbrtError(loc, "stratified sampler: xsamples and ysamples must be >= 1");
+        return Sampler(SamplerType::Stratified, xs * ys, seed, xs, ys, jitter);
+    }
+    if (sppOverride) spp = *sppOverride;
+    if (spp < 1) throw PbrtError(loc, "\"pixelsamples\" must be at least 1");
+    if (name == "independent") return Sampler(SamplerType::Independent, spp, seed);
+    if (name == "sobol" || name == "zsobol" || name == "paddedsobol" || name == "halton" ||
+        name == "pmj02bn") {
+        params.GetOneString("randomization", "");  // any scrambling converges alike
+        return Sampler(SamplerType::Sobol, spp, seed);
+    }
+    throw PbrtError(loc, "Sampler \"" + name + "\" is not supported");
+}
 
 uint32_t PermutationElement(uint32_t i, uint32_t l, uint32_t p) {
     uint32_t w = l - 1;

@@ -8,8 +8,8 @@
 #pragma once
 
 #include <pbrt/ray.h>
-#include <pbrt/transform.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/transform.h>
+#include <pbrt/util/vecmath.h>
 
 #include <string>
 

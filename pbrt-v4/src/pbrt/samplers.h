@@ -13,13 +13,17 @@
 //                                    "Practical Hash-based Owen Scrambling", JCGT 9(4))
 #pragma once
 
-#include <pbrt/rng.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/rng.h>
+#include <pbrt/util/vecmath.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace pbrt {
+
+class ParameterDictionary;
+struct FileLoc;
 
 enum class SamplerType { Independent, Stratified, Sobol };
 
@@ -30,8 +34,18 @@ class Sampler {
     Sampler(SamplerType type, int samplesPerPixel, uint64_t seed, int xSamples = 1,
             int ySamples = 1, bool jitter = true);
 
+    // From a Sampler directive ("pixelsamples" 16, "seed", and per type "xsamples",
+    // "ysamples", "jitter", "randomization"). The seed is `seed` if given (--seed), else the
+    // directive's "seed", else defaultSeed (Option "seed"); spp (--spp) replaces the
+    // sample count (for "stratified", as its most square factorization, as pbrt-v4 does).
+    // Throws PbrtError at loc for unsupported types and bad counts.
+    static Sampler Create(const std::string &name, const ParameterDictionary &params,
+                          uint64_t defaultSeed, std::optional<uint64_t> seed,
+                          std::optional<int> spp, const FileLoc &loc);
+
     SamplerType Type() const { return type; }
     int SamplesPerPixel() const { return spp; }
+    uint64_t Seed() const { return seed; }
     std::string Description() const;
 
     // Begins sample `sampleIndex` of pixel p; dimension counting restarts at `dimension`.

@@ -1,4 +1,4 @@
-#include <pbrt/color.h>
+#include <pbrt/util/color.h>
 
 #include <cctype>
 #include <cmath>

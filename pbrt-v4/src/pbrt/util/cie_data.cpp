@@ -9,7 +9,7 @@
 //   (0.32168, 0.33767), SMPTE ST 2065-1, 300..830 nm); stdillum-F1..F12 (CIE 015:2018
 //   fluorescent illuminants, 380..780 nm).
 
-#include <pbrt/cie_data.h>
+#include <pbrt/util/cie_data.h>
 
 namespace pbrt {
 namespace cie {

@@ -5,7 +5,7 @@
 // to derive independent seeds from pixel coordinates, sample indices and dimensions.
 #pragma once
 
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 #include <cstdint>
 #include <initializer_list>

@@ -10,7 +10,7 @@
 // filter's integral, the same for every sample.
 #pragma once
 
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 #include <string>
 

@@ -1,4 +1,4 @@
-#include <pbrt/progress.h>
+#include <pbrt/util/progress.h>
 
 #include <cstdio>
 

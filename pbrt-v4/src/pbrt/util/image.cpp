@@ -1,6 +1,6 @@
 // Image input and output through libraries: stb_image / stb_image_write (Debian libstb-dev;
 // the implementations live in libstb, linked through cmake/stb.cmake) and OpenEXR.
-#include <pbrt/image.h>
+#include <pbrt/util/image.h>
 
 #include <stb_image.h>
 #include <stb_image_write.h>

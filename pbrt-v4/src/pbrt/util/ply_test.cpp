@@ -1,5 +1,5 @@
 #include <pbrt/test_tempdir.h>
-#include <pbrt/ply.h>
+#include <pbrt/util/ply.h>
 
 #include <gtest/gtest.h>
 

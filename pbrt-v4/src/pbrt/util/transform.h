@@ -5,7 +5,7 @@
 #pragma once
 
 #include <pbrt/ray.h>
-#include <pbrt/vecmath.h>
+#include <pbrt/util/vecmath.h>
 
 #include <string>
 

@@ -3,7 +3,7 @@
 // (and drops face_indices), while the renderer needs the mesh exactly as stored; librply is
 // not packaged for C++ use with the types pbrt scenes use; tinyply and happly are not in
 // Debian.
-#include <pbrt/ply.h>
+#include <pbrt/util/ply.h>
 
 #include <cctype>
 #include <charconv>

@@ -1,4 +1,4 @@
-#include <pbrt/paramdict.h>
+#include <pbrt/util/paramdict.h>
 
 namespace pbrt {
 

@@ -6,7 +6,7 @@
 #pragma once
 
 #include <pbrt/pbrt.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/spectrum.h>
 
 #include <algorithm>
 #include <cstddef>

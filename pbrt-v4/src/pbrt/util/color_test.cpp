@@ -1,6 +1,6 @@
 // Tests of colour spaces and of the RGB-to-spectrum tables (RGB -> spectrum -> RGB).
-#include <pbrt/color.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/spectrum.h>
 
 #include <gtest/gtest.h>
 

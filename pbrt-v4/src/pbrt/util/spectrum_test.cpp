@@ -1,6 +1,6 @@
 // Tests of the spectral representations, named spectra and spectral integrals.
-#include <pbrt/color.h>
-#include <pbrt/spectrum.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/spectrum.h>
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 #include <pbrt/test_tempdir.h>
-#include <pbrt/image.h>
+#include <pbrt/util/image.h>
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include <pbrt/sampling.h>
+#include <pbrt/util/sampling.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
-#include <pbrt/spectrum.h>
+#include <pbrt/util/spectrum.h>
 
-#include <pbrt/cie_data.h>
-#include <pbrt/color.h>
+#include <pbrt/util/cie_data.h>
+#include <pbrt/util/color.h>
 #include <pbrt/wavelengths.h>
 
 #include <cerrno>

@@ -1,5 +1,7 @@
 // Pixel samplers: stratification properties, determinism and uniformity.
-#include <pbrt/sampler.h>
+#include <pbrt/samplers.h>
+
+#include <pbrt/util/paramdict.h>
 
 #include <gtest/gtest.h>
 
@@ -111,5 +113,52 @@ TEST(Sampler, UniformMeanAndVariance) {
         double mean = sum / n, var = sum2 / n - mean * mean;
         EXPECT_NEAR(mean, 0.5, 5 * std::sqrt(1.0 / 12 / n)) << s.Description();
         EXPECT_NEAR(var, 1.0 / 12, 0.005) << s.Description();
+    }
+}
+
+namespace {
+ParsedParameter IntParam(const std::string &name, int v) {
+    ParsedParameter p;
+    p.type = "integer";
+    p.name = name;
+    p.ints = {v};
+    return p;
+}
+}  // namespace
+
+TEST(Sampler, CreateAppliesPbrtV4DefaultsAndTheCommandLine) {
+    const FileLoc loc{"scene.pbrt", 4, 1};
+    Sampler z = Sampler::Create("zsobol", ParameterDictionary(), 0, std::nullopt, std::nullopt, loc);
+    EXPECT_EQ(z.Type(), SamplerType::Sobol);
+    EXPECT_EQ(z.SamplesPerPixel(), 16) << "pbrt-v4's default pixelsamples";
+    EXPECT_EQ(z.Seed(), 0u);
+
+    // Seed: --seed over the directive's "seed" over Option "seed".
+    ParameterDictionary seeded({IntParam("seed", 9), IntParam("pixelsamples", 3)});
+    EXPECT_EQ(Sampler::Create("independent", seeded, 5, std::nullopt, std::nullopt, loc).Seed(), 9u);
+    EXPECT_EQ(Sampler::Create("independent", seeded, 5, uint64_t(11), std::nullopt, loc).Seed(), 11u);
+    EXPECT_EQ(Sampler::Create("independent", ParameterDictionary(), 5, std::nullopt, std::nullopt, loc).Seed(), 5u);
+    EXPECT_EQ(Sampler::Create("independent", seeded, 5, std::nullopt, std::nullopt, loc).SamplesPerPixel(), 3);
+    EXPECT_EQ(Sampler::Create("halton", seeded, 5, std::nullopt, 8, loc).SamplesPerPixel(), 8) << "--spp wins";
+
+    // Stratified: xsamples x ysamples (4 x 4 by default); --spp as its most square factorization.
+    EXPECT_EQ(Sampler::Create("stratified", ParameterDictionary(), 0, std::nullopt, std::nullopt, loc).SamplesPerPixel(), 16);
+    for (int n : {1, 7, 12, 36, 40}) {
+        Sampler s = Sampler::Create("stratified", ParameterDictionary(), 0, std::nullopt, n, loc);
+        EXPECT_EQ(s.Type(), SamplerType::Stratified);
+        EXPECT_EQ(s.SamplesPerPixel(), n);
+    }
+
+    for (const char *bad : {"lowdiscrepancy", "pixelsamples0"}) {
+        try {
+            if (std::string(bad) == "pixelsamples0")
+                Sampler::Create("sobol", ParameterDictionary({IntParam("pixelsamples", 0)}), 0, std::nullopt,
+                                std::nullopt, loc);
+            else
+                Sampler::Create(bad, ParameterDictionary(), 0, std::nullopt, std::nullopt, loc);
+            FAIL() << bad << " accepted";
+        } catch (const PbrtError &e) {
+            EXPECT_NE(std::string(e.what()).find("scene.pbrt:4"), std::string::npos) << e.what();
+        }
     }
 }

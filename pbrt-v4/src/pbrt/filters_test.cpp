@@ -1,9 +1,9 @@
 // Pixel filters: exact filter importance sampling (pdf = f / integral, constant weight) and
 // the sample / pdf / invert triple.
-#include <pbrt/filter.h>
+#include <pbrt/filters.h>
 
-#include <pbrt/paramdict.h>
-#include <pbrt/rng.h>
+#include <pbrt/util/paramdict.h>
+#include <pbrt/util/rng.h>
 
 #include <gtest/gtest.h>
 

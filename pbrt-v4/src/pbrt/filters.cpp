@@ -1,7 +1,7 @@
-#include <pbrt/filter.h>
+#include <pbrt/filters.h>
 
-#include <pbrt/paramdict.h>
-#include <pbrt/sampling.h>
+#include <pbrt/util/paramdict.h>
+#include <pbrt/util/sampling.h>
 
 namespace pbrt {
 
