@@ -1,7 +1,11 @@
 #include <pbrt/wavelengths.h>
 
+#include <pbrt/util/hash.h>
+
 #include <wavelength_table.h>
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 namespace pbrt {
@@ -55,10 +59,24 @@ WavelengthSampler WavelengthSampler::FromTable(const std::string &path, Float de
         throw PbrtError(s.str());
     }
     try {
-        wavelength_table::Table t = wavelength_table::LoadTable(path);
+        // The bytes are read once, hashed for the image's provenance and parsed, so the
+        // hash is of exactly the table rendered with.
+        std::error_code ec;
+        std::ifstream in;
+        if (!std::filesystem::is_directory(path, ec)) in.open(path, std::ios::binary);
+        if (!in) {
+            wavelength_table::LoadTable(path);  // throws the reader's "FILE: reason"
+            throw PbrtError(path + ": cannot open the table file");
+        }
+        std::ostringstream bytes;
+        bytes << in.rdbuf();
+        if (in.bad()) throw PbrtError(path + ": cannot read the table file");
+        std::istringstream text(bytes.str());
+        wavelength_table::Table t = wavelength_table::ParseTable(text, path);
         if (defensiveShare > 0) t = wavelength_table::WithDefensiveMixture(t, defensiveShare);
         return WavelengthSampler(TableWavelengthSampler{
-            std::make_shared<const wavelength_table::Table>(std::move(t)), defensiveShare});
+            std::make_shared<const wavelength_table::Table>(std::move(t)), defensiveShare, path,
+            SHA256Hex(bytes.str())});
     } catch (const wavelength_table::TableError &e) {
         // Already "FILE:LINE: reason" (or "FILE: reason" for a missing file).
         throw PbrtError(e.what());
@@ -98,6 +116,12 @@ Float WavelengthSampler::MaxLambda() const {
 
 bool WavelengthSampler::IsTable() const {
     return std::holds_alternative<TableWavelengthSampler>(impl);
+}
+
+std::string WavelengthSampler::Name() const {
+    if (std::holds_alternative<VisibleWavelengthSampler>(impl)) return "visible";
+    if (std::holds_alternative<UniformWavelengthSampler>(impl)) return "uniform";
+    return "table";
 }
 
 std::vector<std::pair<Float, Float>> WavelengthSampler::ZeroDensityIntervals() const {

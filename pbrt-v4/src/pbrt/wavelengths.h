@@ -104,6 +104,8 @@ struct UniformWavelengthSampler {
 struct TableWavelengthSampler {
     std::shared_ptr<const wavelength_table::Table> table;  // already mixed with `share`
     Float share = 0;  // defensive uniform share mixed in (0: the table as written)
+    std::string file;    // the table file as named on the command line
+    std::string sha256;  // SHA-256 of the bytes read from it (hexadecimal)
     SampledWavelengths Sample(Float u) const;
     Float PDF(Float lambda) const;
     std::string Description() const;
@@ -132,6 +134,10 @@ class WavelengthSampler {
     Float MaxLambda() const;
     // Whether this samples from a table (FromTable).
     bool IsTable() const;
+    // "visible", "uniform" or "table": the kind, as the command line names it.
+    std::string Name() const;
+    // The table sampler (its file, hash and defensive share); nullptr unless IsTable().
+    const TableWavelengthSampler *Table() const { return std::get_if<TableWavelengthSampler>(&impl); }
     // Stretches [a, b] nm inside [MinLambda(), MaxLambda()] where PDF is zero (a table whose
     // four densities vanish together); empty for the built-in samplers.
     std::vector<std::pair<Float, Float>> ZeroDensityIntervals() const;
