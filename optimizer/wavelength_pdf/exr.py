@@ -1,7 +1,7 @@
 """Reading and writing the renderer's images: linear RGB, 32-bit float OpenEXR.
 
 Uses the OpenEXR Python bindings (PyPI ``OpenEXR``). The renderer writes linear values in the
-film's colour space (SPEC 5), so no transfer function is applied or removed here.
+film's colour space (design §5), so no transfer function is applied or removed here.
 """
 from __future__ import annotations
 

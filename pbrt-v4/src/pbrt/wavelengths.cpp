@@ -20,7 +20,7 @@ std::string UniformWavelengthSampler::Description() const {
     return s.str();
 }
 
-// ---- Table-driven sampling (issue 4) ------------------------------------------------------
+// ---- Table-driven sampling -----------------------------------------------------------
 static_assert(NSpectrumSamples == wavelength_table::kNumDensities,
               "a wavelength table holds one density per wavelength of a path");
 
