@@ -1,7 +1,7 @@
 """Reading and writing the renderer's images: linear RGB, 32-bit float OpenEXR.
 
 Uses the OpenEXR Python bindings (PyPI ``OpenEXR``). The renderer writes linear values in the
-film's colour space (SPEC 5), so no transfer function is applied or removed here.
+film's colour space (design §5), so no transfer function is applied or removed here.
 """
 from __future__ import annotations
 
@@ -42,6 +42,29 @@ def read_rgb(path: str | Path) -> np.ndarray:
     except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
         raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
     return rgb
+
+
+def read_header(path: str | Path) -> dict:
+    """Read the header attributes of an EXR file, by name.
+
+    Values are as the OpenEXR bindings give them: ``chromaticities`` is a tuple of eight
+    floats (x, y of red, green, blue and white), ints and floats are Python numbers, strings
+    are ``str`` and 2-vectors are numpy arrays. The renderer's attributes are listed in
+    pbrt-v4/src/pbrt/render.h (``RenderMetadata``).
+
+    Raises
+    ------
+    ImageError
+        If the file is missing or not an EXR file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such image file")
+    try:
+        with OpenEXR.File(str(path), header_only=True) as f:
+            return dict(f.header())
+    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
+        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
 
 
 def write_rgb(path: str | Path, rgb: np.ndarray) -> None:

@@ -94,6 +94,13 @@ Image RGBFilm::GetImage() const {
     return img;
 }
 
-void RGBFilm::WriteImage(const std::string &filename) const { pbrt::WriteImage(filename, GetImage()); }
+void RGBFilm::WriteImage(const std::string &filename, ImageMetadata metadata) const {
+    if (const RGBColorSpace *cs = settings.colorSpace) {
+        auto xy = [](const Chromaticity &c) { return std::array<float, 2>{float(c.x), float(c.y)}; };
+        metadata.chromaticities = ImageMetadata::Chromaticities{xy(cs->r), xy(cs->g), xy(cs->b), xy(cs->w)};
+        metadata.strings["colorSpace"] = cs->Name();
+    }
+    pbrt::WriteImage(filename, GetImage(), metadata);
+}
 
 }  // namespace pbrt

@@ -62,7 +62,9 @@ class RGBFilm {
     }
     // The final image (width x height of the pixel bounds, 3 channels).
     Image GetImage() const;
-    void WriteImage(const std::string &filename) const;
+    // Writes the image with the metadata plus the colour space's "chromaticities" and its
+    // name ("colorSpace") in an EXR file.
+    void WriteImage(const std::string &filename, ImageMetadata metadata = {}) const;
 
   private:
     size_t Offset(Point2i p) const {

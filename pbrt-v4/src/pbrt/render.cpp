@@ -19,6 +19,21 @@ double ProcessCPUSeconds() {
     return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
+ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
+    ImageMetadata m;
+    m.ints["samplesPerPixel"] = scene.sampler.SamplesPerPixel();
+    m.floats["renderTimeSeconds"] = float(stats.wallSeconds);
+    m.strings["seed"] = std::to_string(scene.sampler.Seed());
+    m.strings["wavelengthSampler"] = scene.wavelengths.Name();
+    m.float2s["wavelengthRange"] = {float(scene.wavelengths.MinLambda()), float(scene.wavelengths.MaxLambda())};
+    if (const TableWavelengthSampler *t = scene.wavelengths.Table()) {
+        m.strings["wavelengthTable"] = t->file;
+        m.strings["wavelengthTableSHA256"] = t->sha256;
+        m.floats["wavelengthDefensiveShare"] = float(t->share);
+    }
+    return m;
+}
+
 RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
     std::unique_ptr<tbb::global_control> limit;
     if (nThreads > 0)

@@ -8,6 +8,8 @@
 // what the integrator asks for.
 #pragma once
 
+#include <pbrt/util/image.h>
+
 #include <cstdint>
 
 namespace pbrt {
@@ -21,6 +23,18 @@ struct RenderStats {
 
 // Renders into scene.film. nThreads 0 uses every core.
 RenderStats Render(const Scene &scene, int nThreads, bool quiet);
+
+// The provenance an EXR image of the render records (with the film's "chromaticities" and
+// "colorSpace"):
+//   samplesPerPixel           int     samples per pixel (pbrt-v4's name)
+//   renderTimeSeconds         float   wall-clock seconds of the render (pbrt-v4's name)
+//   seed                      string  the sampler's seed, in decimal (EXR has no 64-bit int)
+//   wavelengthSampler         string  "visible", "uniform" or "table"
+//   wavelengthRange           v2f     the range it samples, in nm
+//   wavelengthTable           string  the table file as named (only with a table)
+//   wavelengthTableSHA256     string  SHA-256 of the table file's bytes, as sha256sum prints it
+//   wavelengthDefensiveShare  float   the uniform share mixed into the table (--wavelength-pdf-defensive)
+ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats);
 
 // CPU time (user + system) used by this process so far, in seconds.
 double ProcessCPUSeconds();

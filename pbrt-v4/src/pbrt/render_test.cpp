@@ -3,7 +3,17 @@
 // meshes from PLY files, error reporting and the Cornell box of ../shared.
 // Tolerances come from the noise measured in each render (standard errors), and each test
 // also bounds the error absolutely so that it can fail.
+#include <pbrt/test_tempdir.h>
 #include <pbrt/test_util.h>
+#include <pbrt/util/hash.h>
+
+#include <ImfChromaticitiesAttribute.h>
+#include <ImfFloatAttribute.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfStringAttribute.h>
+#include <ImfVecAttribute.h>
 
 #include <gtest/gtest.h>
 
@@ -265,4 +275,105 @@ TEST(Render, CornellBoxFromShared) {
     for (int y = 1; y < 6; ++y)
         for (int x = 13; x < 19; ++x) lightY = std::max(lightY, double(PixelXYZ(img, x, y).Y));
     EXPECT_GT(lightY, 5 * mean);
+}
+
+namespace {
+
+// The RGB primaries and white a render's EXR file records, read back with OpenEXR.
+struct ReadBack {
+    Imf::Header header;
+    explicit ReadBack(const std::string &path) : header(Imf::InputFile(path.c_str()).header()) {}
+    template <typename A>
+    const A &Get(const char *name) const {
+        const A *a = header.findTypedAttribute<A>(name);
+        if (!a) throw std::runtime_error(std::string("no attribute ") + name + " of the expected type");
+        return *a;
+    }
+    bool Has(const char *name) const { return header.find(name) != header.end(); }
+};
+
+// Renders scene text and writes its EXR image as pbrt does.
+std::pair<std::unique_ptr<Scene>, RenderStats> RenderAndWrite(const std::string &text, RenderOptions opts,
+                                                              const std::string &exr) {
+    opts.quiet = true;
+    std::unique_ptr<Scene> scene = LoadSceneFromString(text, opts, "test.pbrt");
+    RenderStats stats = Render(*scene, 1, true);
+    scene->film->WriteImage(exr, RenderMetadata(*scene, stats));
+    return {std::move(scene), stats};
+}
+
+const char *kTiny = R"(
+LookAt 0 0 -4  0 0 0  0 1 0
+Camera "perspective" "float fov" [20]
+Film "rgb" "integer xresolution" [4] "integer yresolution" [4]
+Sampler "independent" "integer pixelsamples" [3] "integer seed" [17]
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+)";
+
+}  // namespace
+
+TEST(Render, ExrRecordsColourSpaceAndProvenance) {
+    TempDir dir;
+    // A table (two layouts are read alike; this one is CSV) whose bytes the EXR must hash.
+    std::string tableText = "# provenance test\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n";
+    for (int l = 380; l <= 780; l += 10) tableText += std::to_string(l) + ",1,2,1," + std::to_string(1 + l % 3) + "\n";
+    std::string table = dir.Write("t.csv", tableText);
+
+    struct Case {
+        const char *colorSpace;
+        Chromaticity r, g, b;
+    } cases[] = {{"srgb", {0.64f, 0.33f}, {0.30f, 0.60f}, {0.15f, 0.06f}},
+                 {"rec2020", {0.708f, 0.292f}, {0.170f, 0.797f}, {0.131f, 0.046f}},
+                 {"dci-p3", {0.680f, 0.320f}, {0.265f, 0.690f}, {0.150f, 0.060f}},
+                 {"aces2065-1", {0.7347f, 0.2653f}, {0.0f, 1.0f}, {0.0001f, -0.0770f}}};
+    for (const Case &c : cases) {
+        std::string text = std::string("ColorSpace \"") + c.colorSpace + "\"\n" + kTiny;
+        RenderOptions opts;
+        opts.wavelengthTable = table;
+        opts.defensiveShare = 0.25f;
+        opts.seed = 5000000000ULL;  // beyond 32 bits
+        std::string exr = dir.File(std::string(c.colorSpace) + ".exr");
+        auto [scene, stats] = RenderAndWrite(text, opts, exr);
+
+        ReadBack h(exr);
+        const Imf::Chromaticities &chr = h.Get<Imf::ChromaticitiesAttribute>("chromaticities").value();
+        EXPECT_FLOAT_EQ(chr.red.x, c.r.x) << c.colorSpace;
+        EXPECT_FLOAT_EQ(chr.red.y, c.r.y) << c.colorSpace;
+        EXPECT_FLOAT_EQ(chr.green.x, c.g.x) << c.colorSpace;
+        EXPECT_FLOAT_EQ(chr.green.y, c.g.y) << c.colorSpace;
+        EXPECT_FLOAT_EQ(chr.blue.x, c.b.x) << c.colorSpace;
+        EXPECT_FLOAT_EQ(chr.blue.y, c.b.y) << c.colorSpace;
+        // D65 (0.3127, 0.3290) or the ACES white (0.32168, 0.33767), from the illuminant's spectrum.
+        bool aces = std::string(c.colorSpace) == "aces2065-1";
+        EXPECT_NEAR(chr.white.x, aces ? 0.32168 : 0.3127, 2e-4) << c.colorSpace;
+        EXPECT_NEAR(chr.white.y, aces ? 0.33767 : 0.3290, 2e-4) << c.colorSpace;
+        EXPECT_EQ(h.Get<Imf::StringAttribute>("colorSpace").value(), c.colorSpace);
+
+        EXPECT_EQ(h.Get<Imf::IntAttribute>("samplesPerPixel").value(), 3);
+        EXPECT_EQ(h.Get<Imf::StringAttribute>("seed").value(), "5000000000");
+        EXPECT_FLOAT_EQ(h.Get<Imf::FloatAttribute>("renderTimeSeconds").value(), float(stats.wallSeconds));
+        EXPECT_GT(h.Get<Imf::FloatAttribute>("renderTimeSeconds").value(), 0.f);
+        EXPECT_EQ(h.Get<Imf::StringAttribute>("wavelengthSampler").value(), "table");
+        EXPECT_EQ(h.Get<Imf::V2fAttribute>("wavelengthRange").value(), Imath::V2f(380, 780));
+        EXPECT_EQ(h.Get<Imf::StringAttribute>("wavelengthTable").value(), table);
+        EXPECT_EQ(h.Get<Imf::StringAttribute>("wavelengthTableSHA256").value(), SHA256Hex(tableText));
+        EXPECT_FLOAT_EQ(h.Get<Imf::FloatAttribute>("wavelengthDefensiveShare").value(), 0.25f);
+    }
+
+    // Built-in sampling: its name and range, the scene's seed, and no table attributes.
+    RenderOptions uniform;
+    uniform.wavelengthSampling = "uniform";
+    uniform.lambdaMin = 400;
+    uniform.lambdaMax = 700;
+    uniform.spp = 2;
+    RenderAndWrite(kTiny, uniform, dir.File("uniform.exr"));
+    ReadBack h(dir.File("uniform.exr"));
+    EXPECT_EQ(h.Get<Imf::StringAttribute>("wavelengthSampler").value(), "uniform");
+    EXPECT_EQ(h.Get<Imf::V2fAttribute>("wavelengthRange").value(), Imath::V2f(400, 700));
+    EXPECT_EQ(h.Get<Imf::IntAttribute>("samplesPerPixel").value(), 2);
+    EXPECT_EQ(h.Get<Imf::StringAttribute>("seed").value(), "17");
+    EXPECT_EQ(h.Get<Imf::StringAttribute>("colorSpace").value(), "srgb");
+    for (const char *absent : {"wavelengthTable", "wavelengthTableSHA256", "wavelengthDefensiveShare"})
+        EXPECT_FALSE(h.Has(absent)) << absent;
 }

@@ -1,7 +1,11 @@
 #include <pbrt/wavelengths.h>
 
+#include <pbrt/util/hash.h>
+
 #include <wavelength_table.h>
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 namespace pbrt {
@@ -16,7 +20,7 @@ std::string UniformWavelengthSampler::Description() const {
     return s.str();
 }
 
-// ---- Table-driven sampling (issue 4) ------------------------------------------------------
+// ---- Table-driven sampling -----------------------------------------------------------
 static_assert(NSpectrumSamples == wavelength_table::kNumDensities,
               "a wavelength table holds one density per wavelength of a path");
 
@@ -55,10 +59,32 @@ WavelengthSampler WavelengthSampler::FromTable(const std::string &path, Float de
         throw PbrtError(s.str());
     }
     try {
-        wavelength_table::Table t = wavelength_table::LoadTable(path);
+        // The bytes are read once, hashed for the image's provenance and parsed, so the
+        // hash is of exactly the table rendered with.
+        std::error_code ec;
+        std::ifstream in;
+        if (!std::filesystem::is_directory(path, ec)) in.open(path, std::ios::binary);
+        if (!in.is_open() || !in) {
+            wavelength_table::LoadTable(path);  // throws the reader's "FILE: reason"
+            throw PbrtError(path + ": cannot open the table file");
+        }
+        // A bound on the size keeps a wrong file (a device, a huge log) from exhausting
+        // memory; it is far above any real table (1 nm steps over 360..830 nm: ~30 kB).
+        constexpr size_t kMaxTableBytes = size_t(64) << 20;
+        std::string bytes;
+        char chunk[1 << 16];
+        while (in.read(chunk, sizeof chunk), in.gcount() > 0) {
+            bytes.append(chunk, size_t(in.gcount()));
+            if (bytes.size() > kMaxTableBytes)
+                throw PbrtError(path + ": larger than 64 MiB, not a wavelength table");
+        }
+        if (in.bad()) throw PbrtError(path + ": cannot read the table file");
+        std::istringstream text(bytes);
+        wavelength_table::Table t = wavelength_table::ParseTable(text, path);
         if (defensiveShare > 0) t = wavelength_table::WithDefensiveMixture(t, defensiveShare);
         return WavelengthSampler(TableWavelengthSampler{
-            std::make_shared<const wavelength_table::Table>(std::move(t)), defensiveShare});
+            std::make_shared<const wavelength_table::Table>(std::move(t)), defensiveShare, path,
+            SHA256Hex(bytes)});
     } catch (const wavelength_table::TableError &e) {
         // Already "FILE:LINE: reason" (or "FILE: reason" for a missing file).
         throw PbrtError(e.what());
@@ -98,6 +124,12 @@ Float WavelengthSampler::MaxLambda() const {
 
 bool WavelengthSampler::IsTable() const {
     return std::holds_alternative<TableWavelengthSampler>(impl);
+}
+
+std::string WavelengthSampler::Name() const {
+    if (std::holds_alternative<VisibleWavelengthSampler>(impl)) return "visible";
+    if (std::holds_alternative<UniformWavelengthSampler>(impl)) return "uniform";
+    return "table";
 }
 
 std::vector<std::pair<Float, Float>> WavelengthSampler::ZeroDensityIntervals() const {

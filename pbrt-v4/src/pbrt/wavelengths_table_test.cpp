@@ -256,6 +256,19 @@ TEST(TableWavelengths, BadTablesThrowWithFileLineAndReason) {
     } catch (const PbrtError &e) {
         EXPECT_EQ(std::string(e.what()), missing + ": no such file");
     }
+    // A directory, and an endless file (a device): an error, not a hang or exhausted memory.
+    for (const std::string &notTable : {TestDir().path, std::string("/dev/zero")}) {
+        if (!std::filesystem::exists(notTable)) continue;
+        try {
+            WavelengthSampler::FromTable(notTable);
+            ADD_FAILURE() << notTable << " was accepted as a table";
+        } catch (const PbrtError &e) {
+            std::string what = e.what();
+            EXPECT_EQ(what.rfind(notTable + ": ", 0), 0u) << what;
+            EXPECT_TRUE(what.find("directory") != std::string::npos || what.find("64 MiB") != std::string::npos)
+                << what;
+        }
+    }
 }
 
 TEST(TableWavelengths, RenderConvergesToTheFurnaceWithAnyTableWithoutGaps) {

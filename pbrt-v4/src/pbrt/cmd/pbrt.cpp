@@ -22,8 +22,9 @@ Rendering:
   --maxdepth N                 maximum path depth (overrides the integrator's "maxdepth")
   --nthreads N                 number of threads (default: all cores)
 Output:
-  --outfile FILE               image to write (.exr: linear 32-bit float; .png: sRGB 8-bit);
-                               default: the film's "filename"
+  --outfile FILE               image to write (.exr: linear 32-bit float, the colour space's
+                               chromaticities and the render's provenance as attributes;
+                               .png: sRGB 8-bit); default: the film's "filename"
   --resolution WxH             render at W x H pixels instead of the film's resolution
   --resolution-scale S         multiply the film's (or --resolution's) resolution by S
 Wavelengths (four per path from one random number):
@@ -171,7 +172,7 @@ int main(int argc, char **argv) {
                          scene->sampler.SamplesPerPixel(), scene->sampler.Description().c_str(),
                          scene->integrator.maxDepth, scene->wavelengths.Description().c_str());
         RenderStats stats = Render(*scene, opts.nThreads, opts.quiet);
-        scene->film->WriteImage(outfile);
+        scene->film->WriteImage(outfile, RenderMetadata(*scene, stats));
         if (!opts.quiet)
             std::fprintf(stderr,
                          "pbrt: wrote %s; rendered in %.2f s: %llu paths, %.3f M paths/s, "

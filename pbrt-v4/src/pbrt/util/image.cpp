@@ -7,10 +7,15 @@
 
 #include <ImathBox.h>
 #include <ImfChannelList.h>
+#include <ImfFloatAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
+#include <ImfStringAttribute.h>
+#include <ImfVecAttribute.h>
 
 #include <algorithm>
 #include <array>
@@ -140,12 +145,22 @@ void CheckImage(const std::string &path, const Image &image) {
                                   std::to_string(image.pixels.size()) + " values");
 }
 
-void WriteEXR(const std::string &path, const std::string &target, const Image &image) {
+void WriteEXR(const std::string &path, const std::string &target, const Image &image,
+              const ImageMetadata &metadata) {
     static const char *const names[4][4] = {
         {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
     try {
         Imf::Header header(image.width, image.height);
         header.compression() = Imf::ZIP_COMPRESSION;
+        if (const auto &c = metadata.chromaticities) {
+            auto v = [](const std::array<float, 2> &xy) { return Imath::V2f(xy[0], xy[1]); };
+            Imf::addChromaticities(header, Imf::Chromaticities(v(c->red), v(c->green), v(c->blue), v(c->white)));
+        }
+        for (const auto &[name, value] : metadata.ints) header.insert(name, Imf::IntAttribute(value));
+        for (const auto &[name, value] : metadata.floats) header.insert(name, Imf::FloatAttribute(value));
+        for (const auto &[name, value] : metadata.float2s)
+            header.insert(name, Imf::V2fAttribute(Imath::V2f(value[0], value[1])));
+        for (const auto &[name, value] : metadata.strings) header.insert(name, Imf::StringAttribute(value));
         for (int c = 0; c < image.channels; ++c)
             header.channels().insert(names[image.channels - 1][c], Imf::Channel(Imf::FLOAT));
         const size_t xStride = sizeof(float) * image.channels;
@@ -192,7 +207,7 @@ Image ReadImage(const std::string &path, bool decodeSRGB) {
                           "jpg, bmp, hdr, ppm, pgm)");
 }
 
-void WriteImage(const std::string &path, const Image &image) {
+void WriteImage(const std::string &path, const Image &image, const ImageMetadata &metadata) {
     CheckImage(path, image);
     std::string ext = LowerExtension(path);
     if (ext != ".exr" && ext != ".png")
@@ -201,7 +216,7 @@ void WriteImage(const std::string &path, const Image &image) {
     // Write beside the target, then rename: a failed write leaves no partial file.
     std::string tmp = path + ".tmp" + std::to_string(::getpid());
     try {
-        if (ext == ".exr") WriteEXR(tmp, path, image);
+        if (ext == ".exr") WriteEXR(tmp, path, image, metadata);
         else WritePNG(tmp, path, image);
     } catch (...) {
         std::remove(tmp.c_str());

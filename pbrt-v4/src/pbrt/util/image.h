@@ -4,7 +4,10 @@
 
 #include <pbrt/pbrt.h>
 
+#include <array>
 #include <cstddef>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,12 +34,27 @@ struct Image {
 // Throws PbrtError naming the file if it is missing, unreadable or of another format.
 Image ReadImage(const std::string &path, bool decodeSRGB);
 
+// What an EXR file records besides the pixels, as header attributes (PNG files get none).
+struct ImageMetadata {
+    // CIE 1931 xy of the red, green and blue primaries and of the white of the RGB values:
+    // the standard attribute "chromaticities" (readers assume ITU-R BT.709 without it).
+    struct Chromaticities {
+        std::array<float, 2> red, green, blue, white;
+    };
+    std::optional<Chromaticities> chromaticities;
+    // Further attributes by name and type (EXR int, float, v2f and string).
+    std::map<std::string, int> ints;
+    std::map<std::string, float> floats;
+    std::map<std::string, std::array<float, 2>> float2s;
+    std::map<std::string, std::string> strings;
+};
+
 // Writes an image; the format comes from the extension:
-//   .exr  32-bit float channels R, G, B (A) or Y (A), ZIP compression
+//   .exr  32-bit float channels R, G, B (A) or Y (A), ZIP compression, the metadata's attributes
 //   .png  8 bits per channel: colour sRGB-encoded, alpha linear, both clamped to [0, 1]
 // The file is written under a temporary name and renamed when complete, so a failed write
 // leaves no partial image. Throws PbrtError naming the file on failure.
-void WriteImage(const std::string &path, const Image &image);
+void WriteImage(const std::string &path, const Image &image, const ImageMetadata &metadata = {});
 
 // The sRGB transfer curve (IEC 61966-2-1), on values in [0, 1].
 Float LinearToSRGBCurve(Float linear);

@@ -1,6 +1,14 @@
 #include <pbrt/test_tempdir.h>
 #include <pbrt/util/image.h>
 
+#include <ImfChromaticitiesAttribute.h>
+#include <ImfFloatAttribute.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfStringAttribute.h>
+#include <ImfVecAttribute.h>
+
 #include <gtest/gtest.h>
 
 #include <stb_image.h>
@@ -232,4 +240,43 @@ TEST(Image, EvaluationSceneTextures) {
         for (float v : im.pixels) ASSERT_TRUE(v >= 0 && v <= 1) << e.path();
     }
     EXPECT_GT(count, 0);
+}
+
+TEST(Image, ExrMetadataRoundTripsThroughOpenEXR) {
+    TempDir dir;
+    Image im = RandomImage(5, 3, 3, 0, 2, 7);
+    ImageMetadata m;
+    m.chromaticities = ImageMetadata::Chromaticities{{0.708f, 0.292f}, {0.17f, 0.797f}, {0.131f, 0.046f},
+                                                     {0.3127f, 0.329f}};
+    m.ints["samples"] = -12;
+    m.floats["seconds"] = 1.5f;
+    m.float2s["range"] = {380, 780};
+    m.strings["note"] = "a b\tc";
+    std::string path = dir.File("meta.exr");
+    WriteImage(path, im, m);
+
+    Imf::InputFile file(path.c_str());
+    const Imf::Header &h = file.header();
+    const auto *chr = h.findTypedAttribute<Imf::ChromaticitiesAttribute>("chromaticities");
+    ASSERT_TRUE(chr);
+    EXPECT_EQ(chr->value().red, Imath::V2f(0.708f, 0.292f));
+    EXPECT_EQ(chr->value().green, Imath::V2f(0.17f, 0.797f));
+    EXPECT_EQ(chr->value().blue, Imath::V2f(0.131f, 0.046f));
+    EXPECT_EQ(chr->value().white, Imath::V2f(0.3127f, 0.329f));
+    ASSERT_TRUE(h.findTypedAttribute<Imf::IntAttribute>("samples"));
+    EXPECT_EQ(h.findTypedAttribute<Imf::IntAttribute>("samples")->value(), -12);
+    ASSERT_TRUE(h.findTypedAttribute<Imf::FloatAttribute>("seconds"));
+    EXPECT_EQ(h.findTypedAttribute<Imf::FloatAttribute>("seconds")->value(), 1.5f);
+    ASSERT_TRUE(h.findTypedAttribute<Imf::V2fAttribute>("range"));
+    EXPECT_EQ(h.findTypedAttribute<Imf::V2fAttribute>("range")->value(), Imath::V2f(380, 780));
+    ASSERT_TRUE(h.findTypedAttribute<Imf::StringAttribute>("note"));
+    EXPECT_EQ(h.findTypedAttribute<Imf::StringAttribute>("note")->value(), "a b\tc");
+    // The pixels are unaffected.
+    EXPECT_EQ(ReadImage(path, false).pixels, im.pixels);
+
+    // Without metadata: no chromaticities (readers then assume BT.709), no extra attributes.
+    WriteImage(dir.File("plain.exr"), im);
+    Imf::InputFile plain(dir.File("plain.exr").c_str());
+    EXPECT_EQ(plain.header().find("chromaticities"), plain.header().end());
+    EXPECT_EQ(plain.header().find("samples"), plain.header().end());
 }

@@ -2,7 +2,7 @@
 
 #include <pbrt/util/cie_data.h>
 #include <pbrt/util/color.h>
-#include <pbrt/wavelengths.h>
+#include <pbrt/util/wavelength_densities.h>
 
 #include <cerrno>
 #include <cstdlib>

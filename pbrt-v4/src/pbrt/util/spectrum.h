@@ -151,11 +151,11 @@ class SampledWavelengths {
     // pdf_i = 1 / (lmax - lmin). Throws PbrtError unless 0 < lmin < lmax are finite.
     static SampledWavelengths SampleUniform(Float u, Float lmin = Lambda_min, Float lmax = Lambda_max);
     // Wavelengths and per-wavelength densities computed elsewhere (table-driven sampling;
-    // SPEC section 1: pdf_j = (1/4) sum_k p_k(lambda_j)).
+    // design §1: pdf_j = (1/4) sum_k p_k(lambda_j)).
     static SampledWavelengths FromArrays(const Float lambda[NSpectrumSamples],
                                          const Float pdf[NSpectrumSamples]);
 
-    // For wavelength-dependent refraction (SPEC section 1): keep ONE of the four wavelengths,
+    // For wavelength-dependent refraction (design §1): keep ONE of the four wavelengths,
     // index min(floor(4u), 3) for a fresh uniform u, divide its pdf by 4 and zero the other
     // pdfs. Every slot then holds the kept wavelength (so lambda[0] is the one to refract
     // with), while only the kept slot has a nonzero pdf; the spectra a path carries stay
@@ -357,7 +357,7 @@ std::vector<std::string> NamedSpectrumNames();
 Float InnerProduct(const Spectrum &f, const Spectrum &g);
 // InnerProduct with ybar; for an RGBIlluminantSpectrum, of its illuminant only (pbrt-v4's
 // rule, so that an RGB emitter's "scale" does not depend on its colour). Emitters are
-// divided by this, then multiplied by their "scale" (SPEC section 5).
+// divided by this, then multiplied by their "scale" (design §5).
 Float SpectrumToPhotometric(const Spectrum &s);
 // (InnerProduct with xbar, ybar, zbar) / CIE_Y_integral.
 XYZ SpectrumToXYZ(const Spectrum &s);
