@@ -271,7 +271,3 @@ def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Con
     write_rows(outdir / "results.csv", ev.rows)
     return ev
 
-
-#: Labels of the samplers in Mitsuba's evaluation (the report's legend).
-LABELS = {"uniform": "stratified uniform (Mitsuba uniform srf)", "visible": "Mitsuba 3 default",
-          "table": "optimized table (wavelength_table)"}

@@ -51,10 +51,10 @@ def texture_class(m):
 
         def __init__(self, props):
             m.Texture.__init__(self, props)
-            if not props.has_property("filename"):
+            if "filename" not in props:
                 raise TableError(f"{PLUGIN_NAME}: the texture needs a 'filename' (a wavelength table)")
             self.filename = str(_resolve(str(props["filename"])))
-            self.defensive = float(props["defensive"]) if props.has_property("defensive") else 0.0
+            self.defensive = float(props["defensive"]) if "defensive" in props else 0.0
             self.sampler = TableSampler(read_table(self.filename), m, self.defensive)
 
         def sample_spectrum(self, si, sample, active=True):
