@@ -115,15 +115,20 @@ def sampler_srf(method: str, table: Path | None, lo: float, hi: float) -> ET.Ele
     raise ValueError(f"unknown method {method!r}; choose from uniform, visible, table")
 
 
-def write_variant(scene: Path, out: Path, method: str, table: Path | None, lo: float, hi: float) -> Path:
+def write_variant(scene: Path, out: Path, method: str, table: Path | None, lo: float, hi: float,
+                  sampler: str | None = None) -> Path:
     """A copy of ``scene`` at ``out`` with the sampler's ``srf`` in its sensor and every file
-    name made absolute (the copy lives elsewhere)."""
+    name made absolute (the copy lives elsewhere); ``sampler`` replaces the type of the
+    sensor's sample generator (e.g. ``ldsampler``), None keeps it."""
     root = read_scene(scene)
     base = Path(scene).resolve().parent
     for el in root.iter("string"):
         if el.get("name") == "filename" and "$" not in (el.get("value") or ""):
             el.set("value", str((base / el.get("value")).resolve()))
     sensor = root.find("sensor")
+    if sampler is not None:
+        for el in sensor.iter("sampler"):
+            el.set("type", sampler)
     for old in [c for c in sensor if c.get("name") == "srf"]:
         sensor.remove(old)
     srf = sampler_srf(method, table, lo, hi)
