@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from conftest import variant
+from mitsuba_helpers import variant
 from test_texture import draw, sensor_with_table
 from wavelength_pdf import sampling
 from wavelength_pdf.table import read_table

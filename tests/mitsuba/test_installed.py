@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO, VECTORS
+from mitsuba_helpers import REPO, VECTORS
 
 pytestmark = pytest.mark.slow
 

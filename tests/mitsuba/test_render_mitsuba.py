@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from conftest import REPO, SCENE, TRIBAND, TRIBAND_TABLE
+from mitsuba_helpers import REPO, SCENE, TRIBAND, TRIBAND_TABLE
 from wavelength_pdf.cli import main
 from wavelength_pdf.evaluation import render_mitsuba as rm
 from wavelength_pdf.evaluation.render import RenderError

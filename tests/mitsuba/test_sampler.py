@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import variant
+from mitsuba_helpers import variant
 from wavelength_pdf import sampling
 from wavelength_pdf.mitsuba import TableSampler, defensive_mixture
 from wavelength_pdf.table import Table, TableError, read_table

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import SCENE, variant
+from mitsuba_helpers import SCENE, variant
 from wavelength_pdf import sampling
 from wavelength_pdf.mitsuba import register
 from wavelength_pdf.table import read_table

@@ -20,7 +20,7 @@ import colour
 import numpy as np
 import pytest
 
-from conftest import SCENE, TRIBAND, TRIBAND_TABLE, variant
+from mitsuba_helpers import SCENE, TRIBAND, TRIBAND_TABLE, variant
 from wavelength_pdf.evaluation import metrics, render_mitsuba as rm
 from wavelength_pdf.spectra import load_spectrum
 from wavelength_pdf.table import Table, write_table
