@@ -152,12 +152,15 @@ def scene_params(scene: Path, spectrum: Spectrum, lo: float, hi: float,
     lam, val = lamp_radiance(spectrum, luminance, lo, hi)
     params = {"lamp_wavelengths": ", ".join(f"{v:.10g}" for v in lam),
               "lamp_values": ", ".join(f"{v:.10g}" for v in val)}
-    if resolution is not None:
-        if isinstance(resolution, tuple):
-            w, h = resolution
-        else:
-            w, h = (max(1, int(round(int(d.get(k, "256")) * resolution))) for k in ("width", "height"))
-        params.update(width=str(w), height=str(h))
+    try:
+        size = tuple(int(d.get(k, "256")) for k in ("width", "height"))
+    except ValueError:
+        raise RenderError(f"{scene}: the scene's default width/height are not integers") from None
+    if isinstance(resolution, tuple):
+        size = resolution
+    elif resolution is not None:
+        size = tuple(max(1, int(round(v * resolution))) for v in size)
+    params.update(width=str(size[0]), height=str(size[1]))  # always: the passes need the pixel count
     return params
 
 
