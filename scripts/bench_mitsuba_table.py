@@ -45,20 +45,23 @@ def cost(spectrum, table: Path, res: int, spp: int, runs: int, out: Path) -> Non
     params = rm.scene_params(SCENE_XML, spectrum, 380.0, 780.0, (res, res))
     xml = {m: rm.write_variant(SCENE_XML, out / f"cost-{m}.xml", m, table, 380.0, 780.0) for m in ("visible", "table")}
     times: dict[str, list[float]] = {"visible": [], "table": []}
+    cpu: dict[str, list[float]] = {"visible": [], "table": []}
     for k in range(runs + 1):
         for m in ("visible", "table") if k % 2 == 0 else ("table", "visible"):
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.process_time()
             rm.render_image(xml[m], params, spp, 100 + k, VARIANT)
             if k > 0:  # the first round compiles the kernels
                 times[m].append(time.perf_counter() - start)
+                cpu[m].append(time.process_time() - start_cpu)
     paths = res * res * spp
     for m, ts in times.items():
-        print(f"{m:8s} median {statistics.median(ts):.3f} s  ({paths / statistics.median(ts) / 1e6:.2f} M paths/s; "
-              f"runs {', '.join(f'{t:.3f}' for t in ts)})")
-    ratio = statistics.median(times["table"]) / statistics.median(times["visible"])
-    per_pair = [t / v for t, v in zip(times["table"], times["visible"])]
-    print(f"time per sample, table / Mitsuba default: {ratio:.3f} (median of pairs {statistics.median(per_pair):.3f}; "
-          f"{res}x{res}, {spp} spp, {runs} alternating runs, {VARIANT})")
+        print(f"{m:8s} median {statistics.median(ts):.3f} s wall, {statistics.median(cpu[m]):.3f} s CPU "
+              f"({paths / statistics.median(ts) / 1e6:.2f} M paths/s; wall runs {', '.join(f'{t:.3f}' for t in ts)})")
+    for what, d in (("wall", times), ("CPU (all threads; less sensitive to other jobs)", cpu)):
+        ratio = statistics.median(d["table"]) / statistics.median(d["visible"])
+        pairs = statistics.median([t / v for t, v in zip(d["table"], d["visible"])])
+        print(f"time per sample, table / Mitsuba default, {what}: {ratio:.3f} (median of pairs {pairs:.3f})")
+    print(f"({res}x{res}, {spp} spp, {runs} alternating runs, {VARIANT}, scene loading included)")
 
 
 def error(spectrum_spec: str, table: Path, res: int, spp: int, truth_spp: int, out: Path) -> None:
