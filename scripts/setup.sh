@@ -14,6 +14,7 @@ APT_PACKAGES=(
   python3 python3-venv python3-dev
   libembree-dev libtbb-dev libopenexr-dev libgtest-dev libstb-dev
   coinor-libipopt-dev liblapack-dev libblas-dev
+  libllvm19  # Mitsuba 3.9's llvm variants need LLVM >= 15 (wavelength_pdf.mitsuba finds it)
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

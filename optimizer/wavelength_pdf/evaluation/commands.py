@@ -75,6 +75,12 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
     p.add_argument("--pbrt", type=Path, default=DEFAULT_PBRT, help=f"renderer binary (default {DEFAULT_PBRT})")
 
 
+def _renderer(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--renderer", choices=("pbrt", "mitsuba"), default="pbrt",
+                   help="pbrt (build/pbrt, a .pbrt scene) or mitsuba (Mitsuba 3, llvm_ad_spectral, a .xml "
+                        "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default)")
+
+
 def add_subcommands(sub) -> None:
     """Register ``evaluate``, ``grid``, ``published`` and ``demo`` on the main parser's subparsers."""
     p = sub.add_parser("evaluate", help="render ground truth, baseline and table images of a scene lit "
@@ -87,6 +93,7 @@ def add_subcommands(sub) -> None:
     p.add_argument("-o", "--outdir", type=Path, required=True, help="output folder (renders are cached there)")
     p.add_argument("--table", type=Path, default=None, help="use this table instead of optimizing one")
     _common(p)
+    _renderer(p)
     p.set_defaults(func=cmd_evaluate)
 
     g = sub.add_parser("grid", help="many scene x spectrum evaluations with one progress bar (resumable)",
@@ -130,6 +137,7 @@ def add_subcommands(sub) -> None:
     d.add_argument("--spectrum", default=str(DEMO_SPECTRUM), help="spectrum (default: the tri-band lamp)")
     d.add_argument("--table", type=Path, default=None, help="use this table instead of optimizing one")
     _common(d, spp=(16, 64, 256), truth_spp=4096, resolution="96x96")
+    _renderer(d)
     d.set_defaults(func=cmd_demo)
 
 
@@ -159,7 +167,7 @@ def _images(config: Config) -> int:
 
 
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
-            bar: tqdm | None = None):
+            bar: tqdm | None = None, renderer: str = "pbrt"):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
     spectrum = load_spectrum(spectrum_spec, lo=config.lo, hi=config.hi)
 
@@ -169,7 +177,11 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
             if msg.startswith(tuple(config.methods)):
                 bar.update(1)
 
-    ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say)
+    if renderer == "mitsuba":
+        from wavelength_pdf.evaluation import render_mitsuba
+        ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say)
+    else:
+        ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say)
     title = f"{ev.rows[0].scene} under {spectrum.name}"
     report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
     report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
@@ -184,7 +196,7 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
 def cmd_evaluate(args) -> int:
     config = _config(args)
     with tqdm(total=_images(config), desc="evaluate", file=sys.stderr, unit="image") as bar:
-        ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar)
+        ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar, args.renderer)
     print(report.markdown_table(ev.rows))
     print(f"results: {args.outdir / 'results.csv'}; plots: {args.outdir}/*.png")
     return 0
@@ -276,10 +288,12 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
 
 def cmd_demo(args) -> int:
     config = _config(args)
+    if args.renderer == "mitsuba" and args.scene == DEMO_SCENE:
+        args.scene = DEMO_SCENE.with_suffix(".xml")
     print(f"demo: {args.scene.relative_to(REPO) if args.scene.is_relative_to(REPO) else args.scene} "
           f"lit by {args.spectrum}; output in {args.outdir}", file=sys.stderr)
     with tqdm(total=_images(config), desc="demo", file=sys.stderr, unit="image") as bar:
-        ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar)
+        ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar, args.renderer)
     print(report.markdown_table(ev.rows))
     print(f"table: {ev.table}\nresults: {args.outdir / 'results.csv'}\n"
           f"plots: {args.outdir / 'error-vs-spp-and-time.png'}, {args.outdir / 'error-maps.png'}, "

@@ -1,0 +1,88 @@
+"""Table-driven wavelength sampling in Mitsuba 3's spectral variants (design §1, §5).
+
+Usage::
+
+    import wavelength_pdf.mitsuba as wpm   # before the first llvm variant is set
+    import mitsuba as mi
+    mi.set_variant("llvm_ad_spectral")
+    wpm.register()
+    scene = mi.load_dict({..., "sensor": {"type": "perspective",
+                                          "srf": {"type": "wavelength_table", "filename": "t.csv"}}})
+
+In XML: ``<texture type="wavelength_table" name="srf"><string name="filename" value="t.csv"/>
+</texture>`` inside the ``<sensor>``. See :mod:`wavelength_pdf.mitsuba.texture` for why the plugin
+is a texture used as the sensor's ``srf``.
+
+Importing this package sets ``DRJIT_LIBLLVM_PATH`` to Debian's LLVM 19 when it is unset and the
+library exists (Mitsuba 3.9's llvm variants abort with LLVM 14); it has to happen before an
+llvm variant is first set (:mod:`wavelength_pdf.mitsuba.llvm`).
+"""
+from __future__ import annotations
+
+import importlib
+
+from wavelength_pdf.mitsuba.llvm import ensure_llvm_path
+
+ensure_llvm_path()
+
+from wavelength_pdf.mitsuba.sampler import TableSampler, defensive_mixture  # noqa: E402
+from wavelength_pdf.mitsuba.texture import PLUGIN_NAME, texture_class  # noqa: E402
+
+__all__ = ["register", "registered_variants", "TableSampler", "defensive_mixture", "PLUGIN_NAME",
+           "texture_class", "ensure_llvm_path"]
+
+_REGISTERED: set[str] = set()
+
+
+def _spectral_variants() -> list[str]:
+    import mitsuba
+
+    return [v for v in mitsuba.variants() if "spectral" in v]
+
+
+def register(variants: str | list[str] | None = None) -> list[str]:
+    """Register the ``wavelength_table`` texture in Mitsuba's spectral variants.
+
+    Parameters
+    ----------
+    variants : str, list of str or None
+        Variants to register in; None: every spectral variant this Mitsuba build has whose
+        backend can start here (a cuda variant without a CUDA device is left out).
+
+    Returns
+    -------
+    list of str
+        The variants the plugin is registered in (this call's and earlier ones).
+
+    Raises
+    ------
+    ValueError
+        A named variant is not spectral, or does not exist.
+    """
+    import mitsuba
+
+    if variants is None:
+        names, strict = _spectral_variants(), False
+    else:
+        names, strict = ([variants] if isinstance(variants, str) else list(variants)), True
+    for name in names:
+        if name in _REGISTERED:
+            continue
+        if "spectral" not in name or name not in mitsuba.variants():
+            raise ValueError(f"{name}: not a spectral variant of this Mitsuba build "
+                             f"(spectral variants: {', '.join(_spectral_variants())})")
+        try:
+            m = importlib.import_module(f"mitsuba.{name}")
+            cls = texture_class(m)
+        except (ImportError, RuntimeError) as e:  # e.g. cuda_* without a CUDA device
+            if strict:
+                raise
+            continue
+        m.register_texture(PLUGIN_NAME, lambda props, cls=cls: cls(props))
+        _REGISTERED.add(name)
+    return sorted(_REGISTERED)
+
+
+def registered_variants() -> list[str]:
+    """The variants ``register`` has registered the plugin in."""
+    return sorted(_REGISTERED)

@@ -1,0 +1,188 @@
+"""The table's wavelength sampler (design §1) written for one Mitsuba 3 variant.
+
+The same model as ``wavelength_pdf.sampling`` (the reference) and the header's
+``SampleFour``: one u per path, lambda_k = F_k^-1(u) for the four densities, each inverse the
+exact root of the segment's quadratic in the cancellation-free form 2 r / (a + sqrt(a^2 + 2 s r)),
+solved from the end of the segment where the density is smaller; the estimator divides each
+lane by the mixture density (1/4) sum_k p_k(lambda_j), the balance heuristic.
+
+In the llvm and cuda variants every operation is a Dr.Jit array operation on the variant's
+``Float64`` (the segment search is Mitsuba's ``math.find_interval``, a branch-free binary search
+of log2(M) gathers), so Python runs once while a kernel is traced and never per path. In the
+scalar variants the same formulas run on Python floats, per call. Mitsuba's own
+``IrregularContinuousDistribution`` would do the search too, but its float32 inversion
+subtracts nearly equal numbers on steep segments and cannot reproduce the reference on a
+0.05 nm spike to 1e-5, so the inversion is written here (in double precision, as the header
+keeps the table).
+"""
+from __future__ import annotations
+
+import bisect
+import math
+
+import drjit as dr
+import numpy as np
+
+from wavelength_pdf.table import N_DENSITIES, Table, TableError, normalize
+
+
+def defensive_mixture(table: Table, share: float) -> Table:
+    """(1 - share) p_k + share / (lambda_M - lambda_0) for every k (design §1), renormalized."""
+    share = float(share)
+    if not (0.0 <= share <= 1.0):
+        raise TableError(f"defensive share must be in [0, 1], got {share!r}")
+    grid = np.asarray(table.grid, dtype=np.float64)
+    pdfs = (1.0 - share) * np.asarray(table.pdfs, dtype=np.float64) + share / (grid[-1] - grid[0])
+    return Table(grid=grid.copy(), pdfs=normalize(grid, pdfs), comments=list(table.comments))
+
+
+def _normalized_with_cdf(grid: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """Node values, CDF at the nodes (F[0] = 0, F[M] = 1) and the last segment with mass,
+    by the formulas of ``wavelength_pdf.sampling``."""
+    seg = 0.5 * (p[1:] + p[:-1]) * np.diff(grid)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    total = cum[-1]
+    has_mass = (p[1:] + p[:-1]) > 0
+    last = int(len(has_mass) - 1 - np.argmax(has_mass[::-1]))
+    return p / total, np.minimum(cum / total, 1.0), last
+
+
+class TableSampler:
+    """Four piecewise-linear densities on one grid, sampled with one u per path.
+
+    Parameters
+    ----------
+    table : Table
+        As read by ``wavelength_pdf.table.read_table`` (validated, normalized).
+    module : module
+        A Mitsuba variant module, e.g. ``mitsuba.llvm_ad_spectral``; its ``Float64`` and
+        ``UInt32`` are the array types of the computation.
+    defensive : float
+        Share S of the uniform density mixed into every p_k (design §1); 0 keeps the table.
+    """
+
+    def __init__(self, table: Table, module, defensive: float = 0.0):
+        if defensive:
+            table = defensive_mixture(table, defensive)
+        self.table = table
+        self.m = module
+        self.jit = dr.is_jit_v(module.Float)
+        grid = np.asarray(table.grid, dtype=np.float64)
+        self.n = int(grid.size)
+        self.lo, self.hi = float(grid[0]), float(grid[-1])
+        parts = [_normalized_with_cdf(grid, np.asarray(p, dtype=np.float64)) for p in table.pdfs]
+        self.last = [last for _, _, last in parts]
+        # The mixture at the nodes: linear interpolation commutes with the mean, so the mixture
+        # inside a segment is one interpolation (2 gathers a lane instead of 8).
+        mix = np.mean([pn for pn, _, _ in parts], axis=0)
+        if self.jit:
+            F64 = module.Float64
+            self._grid = F64(grid)
+            self._pn = [F64(pn) for pn, _, _ in parts]
+            self._F = [F64(F) for _, F, _ in parts]
+            self._mix = F64(mix)
+            dr.eval(self._grid, self._pn, self._F, self._mix)
+        else:
+            self._grid = [float(v) for v in grid]
+            self._pn = [[float(v) for v in pn] for pn, _, _ in parts]
+            self._F = [[float(v) for v in F] for _, F, _ in parts]
+            self._mix = [float(v) for v in mix]
+
+    # --- elementary operations: Dr.Jit arrays (jit) or Python floats (scalar) ------------
+
+    def _at(self, values, i):
+        return dr.gather(self.m.Float64, values, i) if self.jit else values[i]
+
+    def _interval(self, values, x):
+        """Largest i in [0, n-2] with values[i] <= x (0 when none is)."""
+        if self.jit:
+            return self.m.math.find_interval(self.n, lambda idx: dr.gather(self.m.Float64, values, idx) <= x)
+        return min(max(bisect.bisect_right(values, x) - 1, 0), self.n - 2)
+
+    def _select(self, cond, a, b):
+        return dr.select(cond, a, b) if self.jit else (a if cond else b)
+
+    def _clip(self, x, lo, hi):
+        return dr.clip(x, lo, hi) if self.jit else min(max(x, lo), hi)
+
+    def _stable_root(self, a, s, r):
+        """The root t >= 0 of s t^2 / 2 + a t = r (a, r >= 0), as 2 r / (a + sqrt(a^2 + 2 s r))."""
+        disc = a * a + 2.0 * s * r
+        if self.jit:
+            den = a + dr.sqrt(dr.maximum(disc, 0.0))
+            return dr.select(den > 0, 2.0 * r / dr.select(den > 0, den, 1.0), 0.0)
+        den = a + math.sqrt(max(disc, 0.0))
+        return 2.0 * r / den if den > 0 else 0.0
+
+    # --- sample / pdf / invert ----------------------------------------------------------
+
+    def sample_segment(self, k: int, u):
+        """Segment i and offset t [nm] of lambda = F_k^-1(u); u in [0, 1] (Float64)."""
+        i, t, _, _ = self._segment(k, u)
+        return i, t
+
+    def _segment(self, k: int, u):
+        """Segment i, offset t, left node x0 and width h of lambda = F_k^-1(u)."""
+        u = self._clip(u, 0.0, 1.0)
+        F, pn = self._F[k], self._pn[k]
+        i = self._interval(F, u)
+        i = dr.minimum(i, self.last[k]) if self.jit else min(i, self.last[k])
+        x0, x1 = self._at(self._grid, i), self._at(self._grid, i + 1)
+        p0, p1 = self._at(pn, i), self._at(pn, i + 1)
+        F0, F1 = self._at(F, i), self._at(F, i + 1)
+        h = x1 - x0
+        s = (p1 - p0) / h
+        zero = 0.0
+        t_left = self._stable_root(p0, s, dr.maximum(u - F0, zero) if self.jit else max(u - F0, zero))
+        tau = self._stable_root(p1, -s, dr.maximum(F1 - u, zero) if self.jit else max(F1 - u, zero))
+        t = self._select(p1 < p0, h - tau, t_left)
+        return i, self._clip(t, 0.0, h), x0, h
+
+    def sample(self, k: int, u):
+        """lambda = F_k^-1(u) [nm]."""
+        i, t = self.sample_segment(k, u)
+        return self._at(self._grid, i) + t
+
+    def _mixture_in_segment(self, i, t, x0=None, h=None):
+        """(1/4) sum_k p_k at offset t of segment i (x0, h: the segment, when known)."""
+        if h is None:
+            x0 = self._at(self._grid, i)
+            h = self._at(self._grid, i + 1) - x0
+        a = self._at(self._mix, i)
+        return a + (self._at(self._mix, i + 1) - a) * (t / h)
+
+    def pdf(self, lam):
+        """Mixture density (1/4) sum_k p_k(lam) [1/nm]; 0 outside the grid."""
+        inside = (lam >= self.lo) & (lam <= self.hi) if self.jit else self.lo <= lam <= self.hi
+        lam_c = self._clip(lam, self.lo, self.hi)
+        i = self._interval(self._grid, lam_c)
+        value = self._mixture_in_segment(i, lam_c - self._at(self._grid, i))
+        return self._select(inside, value, 0.0)
+
+    def invert(self, k: int, lam):
+        """F_k(lam): the u that ``sample(k, u)`` maps to lam (0 left of the grid, 1 right)."""
+        lam_c = self._clip(lam, self.lo, self.hi)
+        i = self._interval(self._grid, lam_c)
+        pn, F = self._pn[k], self._F[k]
+        x0, x1 = self._at(self._grid, i), self._at(self._grid, i + 1)
+        t = lam_c - x0
+        a = self._at(pn, i)
+        p_lam = a + (self._at(pn, i + 1) - a) * (t / (x1 - x0))
+        return self._clip(self._at(F, i) + 0.5 * t * (a + p_lam), 0.0, 1.0)
+
+    def sample_four(self, u):
+        """The four wavelengths of a path and their mixture densities, from one u.
+
+        Returns
+        -------
+        lam : list of 4 Float64 (or floats), nm
+            lambda_k = F_k^-1(u).
+        pdf : list of 4 Float64 (or floats), 1/nm
+            (1/4) sum_m p_m(lambda_k), from the segment the search found (as the header does).
+        """
+        lam, pdf = [], []
+        for k in range(N_DENSITIES):
+            i, t, x0, h = self._segment(k, u)
+            lam.append(x0 + t)
+            pdf.append(self._mixture_in_segment(i, t, x0, h))
+        return lam, pdf

@@ -1,0 +1,62 @@
+"""The plugin works from an installed package, without the checkout: a wheel of the project,
+installed into a folder of its own, registers the texture and renders a scene with a table
+written elsewhere, from a working directory outside the repository."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from mitsuba_helpers import REPO, VECTORS
+
+pytestmark = pytest.mark.slow
+
+SCRIPT = r"""
+import sys, numpy as np
+import wavelength_pdf, wavelength_pdf.mitsuba as wpm
+import mitsuba as mi
+assert wavelength_pdf.__file__.startswith(sys.argv[1]), wavelength_pdf.__file__
+mi.set_variant("llvm_ad_spectral")
+wpm.register("llvm_ad_spectral")
+scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"},
+    "sensor": {"type": "perspective", "srf": {"type": "wavelength_table", "filename": sys.argv[2]},
+               "film": {"type": "hdrfilm", "width": 4, "height": 4}, "sampler": {"type": "independent", "sample_count": 8}},
+    "light": {"type": "constant"}})
+img = np.asarray(mi.render(scene))
+assert np.all(np.isfinite(img)) and img.mean() > 0
+print("ok", wavelength_pdf.__file__)
+"""
+
+
+def test_wheel_installed_elsewhere_renders(tmp_path):
+    wheels = tmp_path / "wheels"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                    "-w", str(wheels), str(REPO)], check=True, timeout=300, cwd=tmp_path)
+    (wheel,) = wheels.glob("wavelength_pdf-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "wavelength_pdf/mitsuba/texture.py" in names and "wavelength_pdf/mitsuba/sampler.py" in names
+    site = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(site), str(wheel)],
+                   check=True, timeout=300)
+    table = tmp_path / "elsewhere" / "table.csv"
+    table.parent.mkdir()
+    table.write_text((VECTORS / "vectors-table.csv").read_text())
+    work = tmp_path / "work"
+    work.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(site)}  # ahead of the checkout's editable install
+    out = subprocess.run([sys.executable, "-c", SCRIPT, str(site), str(table)], cwd=work, env=env,
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert out.stdout.startswith("ok " + str(site))
+
+
+def test_plugin_reads_nothing_from_the_checkout():
+    """No path into the repository (parents[...], REPO, the scenes) in the plugin's code."""
+    for path in (REPO / "optimizer" / "wavelength_pdf" / "mitsuba").glob("*.py"):
+        text = path.read_text()
+        for bad in ("parents[", "REPO", "scenes/", "tests/data", "__file__"):
+            assert bad not in text, f"{path.name} refers to the checkout ({bad})"
