@@ -13,15 +13,20 @@ process's resource usage) of a render at ``--spp`` and of one at three times as 
 that scene loading cancels: paths per CPU-second = (extra paths) / (extra CPU seconds), with
 paths = pixels x spp. The renderers alternate, ``--reps`` times; the medians are printed.
 
+Scenes written for "bdpt" render with bdpt in upstream and with path in this ``pbrt`` (its
+documented difference); those rows say so.
+
 With the patched upstream binary (also built by the check script) it then prints what the
 table costs there: the Cornell box rendered alternately with visible sampling (upstream's
-default) and with ``--wavelength-pdf TABLE``, the same differential measure, and the median
-per-pair ratio table / visible (the target is a cost of at most 2%, ratio >= 0.98).
+default) and with ``--wavelength-pdf TABLE``, one thread, the CPU time of the whole process
+(loading is the same for both), and the median per-pair ratio table / visible (the target
+is a cost of at most 2%, ratio >= 0.98).
 
 A scene or binary that is missing or fails is listed with the reason; the exit status is then 1.
 
 Usage: scripts/bench_renderer.py [--pbrt build/pbrt] [--upstream U] [--patched P]
-           [--table T] [--spp 8] [--reps 3] [--cost-reps 7] [--shared ../shared]
+           [--table T] [--spp 8] [--reps 3] [--cost-reps 7] [--cost-spp 32]
+           [--scenes NAME ...] [--shared ../shared]
 """
 from __future__ import annotations
 
@@ -74,6 +79,13 @@ def render_cpu(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[
     return (after.children_user - before.children_user) + (after.children_system - before.children_system)
 
 
+def process_throughput(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],
+                       tmp: pathlib.Path) -> float:
+    """M paths per CPU-second of one whole single-threaded render (loading included)."""
+    cpu = render_cpu(binary, scene, spp, extra, tmp / "c.exr", 1)
+    return SIZE[0] * SIZE[1] * spp / max(cpu, 1e-9) * 1e-6
+
+
 def throughput(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],
                tmp: pathlib.Path, nthreads: int) -> float:
     """M paths per CPU-second from a render at spp and one at 3 spp (loading cancels)."""
@@ -98,6 +110,7 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=8, help="spp of the smaller render (default 8)")
     ap.add_argument("--reps", type=int, default=3, help="alternating repetitions per scene (default 3)")
     ap.add_argument("--cost-reps", type=int, default=7, help="pairs for the table's cost (default 7)")
+    ap.add_argument("--cost-spp", type=int, default=32, help="spp of the cost renders (default 32)")
     ap.add_argument("--nthreads", type=int, default=2)
     ap.add_argument("--shared", type=pathlib.Path, default=ROOT.parent / "shared")
     ap.add_argument("--scenes", nargs="*", default=list(SCENES))
@@ -143,9 +156,13 @@ def main() -> int:
                 failures += 1
                 continue
             med = {r: statistics.median(v) for r, v in runs.items()}
+            integrator = re.search(r'Integrator\s+"([^"]+)"', scene.read_text())
+            note = ""
+            if integrator and integrator[1] not in ("path", "volpath"):
+                note = f"  (upstream: {integrator[1]}; this pbrt renders it with path)"
             if "upstream" in med:
                 print(f"  {name:15s} {med['this pbrt']:10.3f} {med['upstream']:10.3f} "
-                      f"{med['this pbrt'] / med['upstream']:7.2f}")
+                      f"{med['this pbrt'] / med['upstream']:7.2f}{note}", flush=True)
             else:
                 print(f"  {name:15s} {med['this pbrt']:10.3f} {'-':>10s} {'-':>7s}")
 
@@ -162,15 +179,16 @@ def main() -> int:
         scene = bench_copy(src, tmp / "cost" / "scene.pbrt")
         samplers = {"visible": [], "table": ["--wavelength-pdf", str(table)]}
         runs = {s: [] for s in samplers}
-        print(f"\npatched upstream {args.patched}: Cornell box, visible vs table {table.name}, "
-              f"{args.cost_reps} alternating pairs")
+        print(f"\npatched upstream {args.patched}: Cornell box 256x256, maxdepth 5, {args.cost_spp} spp, "
+              f"1 thread, visible vs table {table.name}, {args.cost_reps} alternating pairs "
+              "(CPU time of the whole process; loading is the same for both)", flush=True)
         try:
             for rep in range(args.cost_reps):
                 order = list(samplers) if rep % 2 == 0 else list(reversed(samplers))
                 for s in order:
-                    runs[s].append(throughput(args.patched, scene, args.spp, samplers[s], tmp, args.nthreads))
+                    runs[s].append(process_throughput(args.patched, scene, args.cost_spp, samplers[s], tmp))
                 print(f"  pair {rep + 1}: visible {runs['visible'][-1]:.4f}, table {runs['table'][-1]:.4f} "
-                      f"M paths/CPU-s, ratio {runs['table'][-1] / runs['visible'][-1]:.4f}")
+                      f"M paths/CPU-s, ratio {runs['table'][-1] / runs['visible'][-1]:.4f}", flush=True)
         except BenchError as e:
             print(f"  failed: {e}")
             return 1
