@@ -1,77 +1,201 @@
 #!/usr/bin/env python3
-"""Renderer benchmark: paths per CPU-second for each evaluation scene, in one run.
+"""Renderer benchmark: this repository's ``pbrt`` beside upstream pbrt-v4, in one run.
 
 Renders the six evaluation scenes ``../shared/scenes/<scene>/scene-v4.pbrt`` (cornell-box,
-veach-mis, teapot, veach-bidir, staircase, glass-of-water) at 256x256 with maximum depth 5
-and prints the throughput that ``pbrt`` reports in its closing line (paths / (user + system
-CPU time of the render)). A scene that is missing or fails to render is listed with the
-reason, and the exit status is then 1. For scale, upstream pbrt-v4 renders the
-256x256 Cornell box (maxdepth 5) at about 0.17 M paths per CPU-second on a 2-core machine
-of this kind; the ratio to that figure is printed too.
+veach-mis, teapot, veach-bidir, staircase, glass-of-water), each as a copy at 256x256 with
+maximum depth 5 (upstream pbrt-v4 has no --resolution or --maxdepth flag, so both renderers
+read the same edited copy), with this repository's ``build/pbrt`` and with unpatched upstream
+pbrt-v4 (the binary ``scripts/check_upstream_patch.sh`` builds), and prints paths per
+CPU-second for both and their ratio.
 
-Usage: scripts/bench_renderer.py [--pbrt build/pbrt] [--spp 16] [--shared ../shared]
+Both are measured the same way, from outside: the CPU time (user + system, from the
+process's resource usage) of a render at ``--spp`` and of one at three times as many, so
+that scene loading cancels: paths per CPU-second = (extra paths) / (extra CPU seconds), with
+paths = pixels x spp. The renderers alternate, ``--reps`` times; the medians are printed.
+
+Scenes written for "bdpt" render with bdpt in upstream and with path in this ``pbrt`` (its
+documented difference); those rows say so.
+
+With the patched upstream binary (also built by the check script) it then prints what the
+table costs there: the Cornell box rendered alternately with visible sampling (upstream's
+default) and with ``--wavelength-pdf TABLE``, one thread, the CPU time of the whole process
+(loading is the same for both), and the median per-pair ratio table / visible (the target
+is a cost of at most 2%, ratio >= 0.98).
+
+A scene or binary that is missing or fails is listed with the reason; the exit status is then 1.
+
+Usage: scripts/bench_renderer.py [--pbrt build/pbrt] [--upstream U] [--patched P]
+           [--table T] [--spp 8] [--reps 3] [--cost-reps 7] [--cost-spp 32]
+           [--scenes NAME ...] [--shared ../shared]
 """
 from __future__ import annotations
 
 import argparse
+import os
 import pathlib
 import re
+import statistics
 import subprocess
 import sys
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-UPSTREAM_CORNELL_MPATHS_PER_CPU_S = 0.17  # pbrt-v4, 256x256 Cornell box, maxdepth 5, 2 cores
+sys.path.insert(0, str(ROOT / "optimizer"))
+from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402
+
+CHECK_DIR = ROOT.parent / "upstream-check"  # scripts/check_upstream_patch.sh's default
 # The evaluation scenes (../shared/scenes/README.md), the Cornell box first.
 SCENES = ("cornell-box", "veach-mis", "teapot", "veach-bidir", "staircase", "glass-of-water")
+SIZE = (256, 256)
+MAXDEPTH = 5
+TARGET_RATIO = 0.98  # a table costs at most 2% per path
 
-CLOSING = re.compile(r"rendered in ([0-9.]+) s: (\d+) paths, ([0-9.]+) M paths/s, ([0-9.]+) M paths per CPU-second")
+
+class BenchError(RuntimeError):
+    pass
 
 
-def bench_scene(pbrt: pathlib.Path, scene: pathlib.Path, spp: int, out: pathlib.Path) -> tuple[str, str]:
-    """Renders one scene; returns (status, text) where status is "ok" or "skipped"."""
-    cmd = [str(pbrt), "--resolution", "256x256", "--maxdepth", "5", "--spp", str(spp),
-           "--seed", "1", "--outfile", str(out), str(scene)]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+def bench_copy(scene: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
+    """A copy of ``scene`` at 256x256 with maximum depth 5."""
+    edit_scene(scene, None, out, resolution=SIZE)
+    text = out.read_text()
+    text, n = re.subn(r'("integer maxdepth"\s*\[?\s*)\d+', rf"\g<1>{MAXDEPTH}", text)
+    if n == 0:
+        text, n = re.subn(r'(Integrator\s+"[^"]+")', rf'\1 "integer maxdepth" [ {MAXDEPTH} ]', text, count=1)
+    out.write_text(text)
+    return out
+
+
+def render_cpu(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],
+               out: pathlib.Path, nthreads: int) -> float:
+    cmd = [str(binary), "--quiet", "--spp", str(spp), "--seed", "1", "--nthreads", str(nthreads),
+           *extra, "--outfile", str(out), str(scene)]
+    before = os.times()
+    proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    after = os.times()
     if proc.returncode != 0:
-        lines = [line for line in proc.stderr.splitlines() if line.startswith("pbrt:")]
-        return "skipped", (lines[-1] if lines else proc.stderr.strip()[-200:])
-    m = CLOSING.search(proc.stderr)
-    if not m:
-        return "skipped", "no closing line in the output"
-    wall, paths, per_s, per_cpu_s = float(m[1]), int(m[2]), float(m[3]), float(m[4])
-    return "ok", f"{per_cpu_s:7.3f} M paths/CPU-s  ({per_s:.3f} M paths/s wall, {paths} paths in {wall:.2f} s)"
+        lines = [line for line in proc.stderr.splitlines() if line.strip()]
+        raise BenchError(f"{binary.name}: exit {proc.returncode}: {lines[-1] if lines else ''}")
+    return (after.children_user - before.children_user) + (after.children_system - before.children_system)
+
+
+def process_throughput(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],
+                       tmp: pathlib.Path) -> float:
+    """M paths per CPU-second of one whole single-threaded render (loading included)."""
+    cpu = render_cpu(binary, scene, spp, extra, tmp / "c.exr", 1)
+    return SIZE[0] * SIZE[1] * spp / max(cpu, 1e-9) * 1e-6
+
+
+def throughput(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],
+               tmp: pathlib.Path, nthreads: int) -> float:
+    """M paths per CPU-second from a render at spp and one at 3 spp (loading cancels)."""
+    c1 = render_cpu(binary, scene, spp, extra, tmp / "a.exr", nthreads)
+    c3 = render_cpu(binary, scene, 3 * spp, extra, tmp / "b.exr", nthreads)
+    paths = SIZE[0] * SIZE[1] * 2 * spp
+    if not c3 > c1:
+        raise BenchError(f"{binary.name}: CPU time did not grow with spp ({c1:.2f} s, {c3:.2f} s)")
+    return paths / (c3 - c1) * 1e-6
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pbrt", type=pathlib.Path, default=ROOT / "build" / "pbrt")
-    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--upstream", type=pathlib.Path, default=CHECK_DIR / "unpatched" / "build" / "pbrt",
+                    help="unpatched upstream pbrt-v4 (default: the check script's build)")
+    ap.add_argument("--patched", type=pathlib.Path, default=CHECK_DIR / "patched" / "build" / "pbrt",
+                    help="patched upstream pbrt-v4, for the table's cost (default: the check script's)")
+    ap.add_argument("--table", type=pathlib.Path, default=None,
+                    help="table for the cost measurement (default: the check script's LSPDD 2482 "
+                         "table, else tests/data/tables/tri-band-fluorescent-optimized.csv)")
+    ap.add_argument("--spp", type=int, default=8, help="spp of the smaller render (default 8)")
+    ap.add_argument("--reps", type=int, default=3, help="alternating repetitions per scene (default 3)")
+    ap.add_argument("--cost-reps", type=int, default=7, help="pairs for the table's cost (default 7)")
+    ap.add_argument("--cost-spp", type=int, default=32, help="spp of the cost renders (default 32)")
+    ap.add_argument("--nthreads", type=int, default=2)
     ap.add_argument("--shared", type=pathlib.Path, default=ROOT.parent / "shared")
+    ap.add_argument("--scenes", nargs="*", default=list(SCENES))
     args = ap.parse_args()
-    if not args.pbrt.exists():
+    if args.spp < 1 or args.reps < 1 or args.cost_reps < 1:
+        print("bench_renderer: --spp, --reps and --cost-reps must be at least 1", file=sys.stderr)
+        return 1
+    if not args.pbrt.is_file():
         print(f"bench_renderer: {args.pbrt} not found (build it with scripts/setup.sh)", file=sys.stderr)
         return 1
     if not (args.shared / "scenes").is_dir():
         print(f"bench_renderer: no scenes under {args.shared / 'scenes'}", file=sys.stderr)
         return 1
-    scenes = [args.shared / "scenes" / name / "scene-v4.pbrt" for name in SCENES]
-    failures = 0
-    print(f"pbrt: {args.pbrt}; 256x256, maxdepth 5, {args.spp} spp")
-    with tempfile.TemporaryDirectory() as tmp:
-        for scene in scenes:
-            name = scene.parent.name
-            if not scene.exists():
-                print(f"  {name:15s} missing: {scene}")
+    renderers = {"this pbrt": args.pbrt}
+    if args.upstream.is_file():
+        renderers["upstream"] = args.upstream
+    else:
+        print(f"bench_renderer: no upstream binary at {args.upstream} "
+              "(scripts/check_upstream_patch.sh builds it); measuring this pbrt only", file=sys.stderr)
+    failures = 0 if "upstream" in renderers else 1
+    print(f"{SIZE[0]}x{SIZE[1]}, maxdepth {MAXDEPTH}, {args.spp} and {3 * args.spp} spp, "
+          f"{args.nthreads} threads, {args.reps} alternating reps; M paths per CPU-second (medians)")
+    for name, path in renderers.items():
+        print(f"  {name}: {path}")
+    print(f"  {'scene':15s} {'this pbrt':>10s} {'upstream':>10s} {'ratio':>7s}")
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = pathlib.Path(tmpdir)
+        for name in args.scenes:
+            src = args.shared / "scenes" / name / "scene-v4.pbrt"
+            if not src.is_file():
+                print(f"  {name:15s} missing: {src}")
                 failures += 1
                 continue
-            status, text = bench_scene(args.pbrt, scene, args.spp, pathlib.Path(tmp) / "out.exr")
-            failures += status != "ok"
-            print(f"  {name:15s} {text}" if status == "ok" else f"  {name:15s} skipped: {text}")
-            if status == "ok" and name == "cornell-box":
-                per_cpu = float(text.split()[0])
-                print(f"  {'':15s} {per_cpu / UPSTREAM_CORNELL_MPATHS_PER_CPU_S:.2f}x upstream pbrt-v4's "
-                      f"{UPSTREAM_CORNELL_MPATHS_PER_CPU_S} M paths/CPU-s")
+            scene = bench_copy(src, tmp / name / "scene.pbrt")
+            runs: dict[str, list[float]] = {r: [] for r in renderers}
+            try:
+                for rep in range(args.reps):
+                    order = list(renderers) if rep % 2 == 0 else list(reversed(renderers))
+                    for r in order:
+                        runs[r].append(throughput(renderers[r], scene, args.spp, [], tmp, args.nthreads))
+            except BenchError as e:
+                print(f"  {name:15s} failed: {e}")
+                failures += 1
+                continue
+            med = {r: statistics.median(v) for r, v in runs.items()}
+            integrator = re.search(r'Integrator\s+"([^"]+)"', scene.read_text())
+            note = ""
+            if integrator and integrator[1] not in ("path", "volpath"):
+                note = f"  (upstream: {integrator[1]}; this pbrt renders it with path)"
+            if "upstream" in med:
+                print(f"  {name:15s} {med['this pbrt']:10.3f} {med['upstream']:10.3f} "
+                      f"{med['this pbrt'] / med['upstream']:7.2f}{note}", flush=True)
+            else:
+                print(f"  {name:15s} {med['this pbrt']:10.3f} {'-':>10s} {'-':>7s}")
+
+        # The table's cost in patched upstream: visible vs table, alternating pairs.
+        table = args.table
+        if table is None:
+            table = CHECK_DIR / "check" / "table-2482.csv"
+            if not table.is_file():
+                table = ROOT / "tests" / "data" / "tables" / "tri-band-fluorescent-optimized.csv"
+        if not args.patched.is_file():
+            print(f"\nno patched upstream binary at {args.patched}: the table's cost is not measured")
+            return 1
+        src = args.shared / "scenes" / "cornell-box" / "scene-v4.pbrt"
+        scene = bench_copy(src, tmp / "cost" / "scene.pbrt")
+        samplers = {"visible": [], "table": ["--wavelength-pdf", str(table)]}
+        runs = {s: [] for s in samplers}
+        print(f"\npatched upstream {args.patched}: Cornell box 256x256, maxdepth 5, {args.cost_spp} spp, "
+              f"1 thread, visible vs table {table.name}, {args.cost_reps} alternating pairs "
+              "(CPU time of the whole process; loading is the same for both)", flush=True)
+        try:
+            for rep in range(args.cost_reps):
+                order = list(samplers) if rep % 2 == 0 else list(reversed(samplers))
+                for s in order:
+                    runs[s].append(process_throughput(args.patched, scene, args.cost_spp, samplers[s], tmp))
+                print(f"  pair {rep + 1}: visible {runs['visible'][-1]:.4f}, table {runs['table'][-1]:.4f} "
+                      f"M paths/CPU-s, ratio {runs['table'][-1] / runs['visible'][-1]:.4f}", flush=True)
+        except BenchError as e:
+            print(f"  failed: {e}")
+            return 1
+        ratios = [t / v for t, v in zip(runs["table"], runs["visible"])]
+        ratio = statistics.median(ratios)
+        print(f"  median ratio table / visible: {ratio:.4f} (cost per path {100 * (1 / ratio - 1):+.2f}%; "
+              f"target ratio >= {TARGET_RATIO}; spread {min(ratios):.4f}..{max(ratios):.4f})")
     return 1 if failures else 0
 
 
