@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wavelength_pdf.model import RANGE
+
 __all__ = [
     "Spectrum",
     "SpectrumError",
@@ -43,8 +45,8 @@ __all__ = [
     "light_source",
 ]
 
-#: The wavelength range of the default table grid, nm (SPEC 1: 380, 385, ..., 780 nm).
-VISIBLE_RANGE: tuple[float, float] = (380.0, 780.0)
+#: The wavelength range of the default table grid, nm (design §1).
+VISIBLE_RANGE: tuple[float, float] = RANGE
 
 
 class SpectrumError(ValueError):
