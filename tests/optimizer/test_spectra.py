@@ -20,7 +20,7 @@ from wavelength_pdf.spectra import (
 
 REPO = Path(__file__).resolve().parents[2]
 DATA = REPO / "tests" / "data" / "spectra"
-SHARED = REPO.parent / "shared"
+from conftest import SHARED  # noqa: E402
 LSPDD = SHARED / "spectra" / "lspdd"
 
 
