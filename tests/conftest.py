@@ -1,15 +1,22 @@
-"""Shared fixtures: where the repository, the renderer and ../shared are."""
+"""Shared fixtures: where the repository, the renderer and ../shared are.
+
+``$WAVELENGTH_PDF_SHARED`` names the folder of shared reference material (scenes, LSPDD
+spectra, reference tables); by default ``../shared`` beside the repository. Tests that need
+it skip cleanly when it is absent.
+"""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
+import jax
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
-SHARED = REPO.parent / "shared"
-#: The renderer under test; PBRT_BIN overrides it (e.g. a developer's own build folder).
-PBRT = Path(os.environ.get("PBRT_BIN", REPO / "build" / "pbrt"))
+from repo_paths import PBRT, REPO, SHARED  # noqa: E402,F401  (one place for the paths)
+
+# The tests call the numerical modules (objective, sampling, health) directly, which expect
+# float64; the library's entry points scope it themselves (tests/optimizer/test_package.py
+# checks that importing the package leaves this setting alone, in a fresh interpreter).
+jax.config.update("jax_enable_x64", True)
 
 
 @pytest.fixture(scope="session")
@@ -19,9 +26,9 @@ def repo() -> Path:
 
 @pytest.fixture(scope="session")
 def shared() -> Path:
-    """../shared, or a clean skip when this checkout has none beside it."""
+    """The shared reference material, or a clean skip when it is absent."""
     if not SHARED.is_dir():
-        pytest.skip("../shared is not present beside the repository")
+        pytest.skip(f"{SHARED} (shared reference material) is not present")
     return SHARED
 
 

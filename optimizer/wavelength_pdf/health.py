@@ -1,4 +1,4 @@
-"""Health of a table's estimator: what J cannot see (issue 2, "degenerate optima").
+"""Health of a table's estimator: what J cannot see ("degenerate optima", design §4).
 
 J is blind to bias (it drops when a density gives up support where the spectrum is
 non-zero: the colour is then estimated from the rest, consistently but wrongly) and to
@@ -13,8 +13,10 @@ with an enormous C(u) costs almost nothing). Two figures catch both:
   support where f > 0 shows exactly the mass it lost.
 - ``std``: std(C(u)) / c per channel, from the u-quadrature of the objective.
 
-A table is accepted when its bias is at most ``MAX_BIAS`` and no channel's std is worse
-than the initialization's (within ``STD_RTOL``).
+The acceptance rule is one function, :func:`rejection`, used by the solvers, the optimizer's
+result, ``show``, ``batch`` and the evaluation: a table is accepted when its bias is at most
+``MAX_BIAS``, no channel's std is worse than the initialization's (within ``STD_RTOL``) and,
+when both are known, its J is no worse than stratified uniform sampling's.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ import numpy as np
 from . import objective, sampling
 from .objective import Problem
 
-#: Largest accepted relative bias of the estimator's mean (issue 2).
+#: Largest accepted relative bias of the estimator's mean (design §4).
 MAX_BIAS = 1e-6
 
 #: Relative tolerance when comparing a channel's std with the initialization's.
@@ -70,32 +72,47 @@ class Health:
         return self.std
 
     def accepted(self, reference: "Health | None" = None) -> bool:
-        """True if unbiased (<= MAX_BIAS) and, given a reference (the initialization),
-        no channel's std exceeds the reference's by more than STD_RTOL."""
-        if not (np.isfinite(self.bias) and self.bias <= MAX_BIAS):
-            return False
-        if not np.all(np.isfinite(self.std)):
-            return False
-        if reference is None:
-            return True
-        return bool(np.all(self.std <= reference.std * (1.0 + STD_RTOL)))
+        """True if :func:`rejection` finds nothing against this table's health."""
+        return not rejection(self, reference)
 
     def reason(self, reference: "Health | None" = None) -> str:
-        """Why the table is not accepted ('' if it is)."""
-        if not (np.isfinite(self.bias) and self.bias <= MAX_BIAS):
-            return f"relative bias {self.bias:.3g} exceeds {MAX_BIAS:g}"
-        if not np.all(np.isfinite(self.std)):
-            return "std of the estimator is not finite"
-        if reference is not None:
-            worse = self.std > reference.std * (1.0 + STD_RTOL)
-            if np.any(worse):
-                ch = ",".join("XYZ"[i] for i in np.flatnonzero(worse))
-                return f"std/c worse than the initialization's in channel(s) {ch}"
-        return ""
+        """Why the table is not accepted ('' if it is); see :func:`rejection`."""
+        return rejection(self, reference)
 
     def summary(self) -> str:
         s = self.std
         return f"bias={self.bias:.2e} std/c=({s[0]:.4g},{s[1]:.4g},{s[2]:.4g})"
+
+
+def rejection(health: "Health", reference: "Health | None" = None, J: float | None = None,
+              J_uniform: float | None = None) -> str:
+    """Why a table is not accepted, or '' if it is: the project's one acceptance rule.
+
+    Parameters
+    ----------
+    health : Health
+        The table's estimator health.
+    reference : Health, optional
+        The initialization's health: no channel's std may exceed it (within STD_RTOL).
+    J, J_uniform : float, optional
+        The table's J and stratified uniform sampling's: a table worse than uniform
+        (``J > J_uniform``) is never accepted.
+    """
+    if not (np.isfinite(health.bias) and health.bias <= MAX_BIAS):
+        return f"relative bias {health.bias:.3g} exceeds {MAX_BIAS:g}"
+    if not np.all(np.isfinite(health.std)):
+        return "std of the estimator is not finite"
+    if reference is not None:
+        worse = health.std > reference.std * (1.0 + STD_RTOL)
+        if np.any(worse):
+            ch = ",".join("XYZ"[i] for i in np.flatnonzero(worse))
+            return f"std/c worse than the initialization's in channel(s) {ch}"
+    if J is not None and J_uniform is not None:
+        if not np.isfinite(J):
+            return f"J is {J}"
+        if J > J_uniform:
+            return f"J {J:.6g} is worse than stratified uniform sampling's {J_uniform:.6g}"
+    return ""
 
 
 def _mean_in_wavelength(arr: dict, P: jax.Array, glx: jax.Array, glw: jax.Array):

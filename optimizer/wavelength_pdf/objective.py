@@ -51,8 +51,7 @@ from . import colorimetry, sampling
 
 Array = jax.Array
 
-#: The default table grid of SPEC 1: 380, 385, ..., 780 nm (81 nodes).
-DEFAULT_GRID = np.arange(380.0, 781.0, 5.0)
+from .model import DEFAULT_GRID  # noqa: E402  (380, 385, ..., 780 nm; design §1)
 
 #: Gauss-Legendre points per piece between u-breakpoints: the resolution the solvers
 #: search with and report (J), and the refined one that shows J has converged (J_fine;

@@ -21,6 +21,7 @@ matplotlib.use("Agg")  # files only, no display
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from wavelength_pdf.precision import float64  # noqa: E402
 from wavelength_pdf.spectra import Spectrum  # noqa: E402
 from wavelength_pdf.table import Table  # noqa: E402
 
@@ -48,6 +49,7 @@ def _init_pdfs(problem) -> np.ndarray | None:
     return np.asarray(init.equal_mass_partition(problem), dtype=np.float64)
 
 
+@float64
 def colour_bar_rows(spectrum: Spectrum, table: Table, init_pdfs: np.ndarray | None = None,
                     n_u: int = N_U) -> tuple[list[str], np.ndarray]:
     """Labels and XYZ of the colour bar rows, shape (rows, n_u, 3), scaled so c has Y = 1.

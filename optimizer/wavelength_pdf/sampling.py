@@ -24,8 +24,7 @@ import jax.numpy as jnp
 
 Array = jax.Array
 
-#: Number of densities (wavelengths per path) in a table (SPEC section 1).
-N_DENSITIES = 4
+from .model import N_DENSITIES  # noqa: E402  (wavelengths per path; design §1)
 
 
 def _segment_widths(grid: Array) -> Array:

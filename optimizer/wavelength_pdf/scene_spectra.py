@@ -32,13 +32,13 @@ scenes; it is a tokenizer plus a walk over statements, not a scene builder.
 from __future__ import annotations
 
 import os
-import re
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from wavelength_pdf.pbrt_syntax import Param, Statement, Token, split_params, statements, tokenize  # noqa: F401,E501
 from wavelength_pdf.spectra import (
     Spectrum,
     SpectrumError,
@@ -57,6 +57,7 @@ __all__ = [
     "scan_scene",
     "scene_spectra",
     "select_emitter",
+    "read_scene",
     "named_spectrum",
     "NAMED_SPECTRA",
 ]
@@ -95,22 +96,6 @@ class NotOptimizableWarning(UserWarning):
     """An emitter that has no lamp spectrum (RGB colour or image) and gets no table."""
 
 
-@dataclass(frozen=True)
-class Token:
-    """One lexical token of a pbrt file: ``kind`` is 'str', 'num', 'word', '[' or ']'."""
-
-    kind: str
-    text: str
-    path: Path
-    line: int
-    start: int = 0  # character offsets of the token in its file's text (quotes included)
-    end: int = 0
-
-    @property
-    def where(self) -> str:
-        return f"{self.path}:{self.line}"
-
-
 @dataclass
 class Emitter:
     """One emitter statement of a scene.
@@ -132,148 +117,6 @@ class Emitter:
     spectrum: Spectrum | None
     reason: str = ""
 
-
-# --------------------------------------------------------------------------------------
-# Tokens
-# --------------------------------------------------------------------------------------
-
-_TOKEN = re.compile(
-    r"""
-      (?P<ws>[ \t\r\f\v]+)
-    | (?P<nl>\n)
-    | (?P<comment>\#[^\n]*)
-    | (?P<str>"(?:[^"\\\n]|\\.)*")
-    | (?P<open>\[)
-    | (?P<close>\])
-    | (?P<atom>[^\s\[\]"#]+)
-    | (?P<bad>")
-    """,
-    re.VERBOSE,
-)
-_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
-_ESCAPES = {"n": "\n", "t": "\t", "b": "\b", "f": "\f", "r": "\r", "\\": "\\", '"': '"', "'": "'"}
-
-
-def tokenize(text: str, path: Path) -> list[Token]:
-    """Split pbrt scene text into tokens (comments dropped, strings unquoted)."""
-    tokens: list[Token] = []
-    line = 1
-    for m in _TOKEN.finditer(text):
-        kind = m.lastgroup
-        s = m.group()
-        if kind == "nl":
-            line += 1
-        elif kind in ("ws", "comment"):
-            pass
-        elif kind == "str":
-            body = re.sub(r"\\(.)", lambda e: _ESCAPES.get(e.group(1), e.group(1)), s[1:-1])
-            tokens.append(Token("str", body, path, line, m.start(), m.end()))
-        elif kind == "open":
-            tokens.append(Token("[", s, path, line, m.start(), m.end()))
-        elif kind == "close":
-            tokens.append(Token("]", s, path, line, m.start(), m.end()))
-        elif kind == "atom":
-            tokens.append(Token("num" if _NUMBER.match(s) else "word", s, path, line, m.start(), m.end()))
-        else:
-            raise SpectrumError(f"{path}:{line}: unterminated string")
-    return tokens
-
-
-# --------------------------------------------------------------------------------------
-# Statements
-# --------------------------------------------------------------------------------------
-
-@dataclass
-class _Param:
-    type: str
-    name: str
-    values: list[Token]
-    decl: Token
-
-    @property
-    def where(self) -> str:
-        return self.decl.where
-
-
-@dataclass
-class _Statement:
-    """A directive and its items: tokens, or token lists for bracketed arrays."""
-
-    directive: Token
-    items: list
-    args: list[Token] = field(default_factory=list)      # positional arguments
-    params: list[_Param] = field(default_factory=list)   # the parameter list
-
-    def first_string(self) -> str | None:
-        it = self.items[0] if self.items else None
-        if isinstance(it, list) and len(it) == 1:
-            it = it[0]
-        return it.text if isinstance(it, Token) and it.kind == "str" else None
-
-
-def statements(tokens: list[Token]):
-    """Group tokens into statements: a directive word, its arguments, its parameter list."""
-    i, n = 0, len(tokens)
-    while i < n:
-        tok = tokens[i]
-        if tok.kind != "word" or tok.text in ("true", "false"):
-            raise SpectrumError(f"{tok.where}: unexpected {tok.text!r} (expected a directive)")
-        j = i + 1
-        items: list[Token | list[Token]] = []
-        while j < n and not (tokens[j].kind == "word" and tokens[j].text not in ("true", "false")):
-            if tokens[j].kind == "[":
-                k = j + 1
-                while k < n and tokens[k].kind != "]":
-                    if tokens[k].kind == "[":
-                        raise SpectrumError(f"{tokens[k].where}: nested '[' is not allowed")
-                    k += 1
-                if k == n:
-                    raise SpectrumError(f"{tokens[j].where}: '[' is never closed")
-                items.append(tokens[j + 1:k])
-                j = k + 1
-            elif tokens[j].kind == "]":
-                raise SpectrumError(f"{tokens[j].where}: ']' without '['")
-            else:
-                items.append(tokens[j])
-                j += 1
-        yield _Statement(tok, items)
-        i = j
-
-
-_PARAM_DECL = re.compile(r"^\s*([A-Za-z][\w]*)\s+([^\s]+)\s*$")
-
-
-def split_params(st: _Statement, n_positional: int) -> _Statement:
-    """Fill ``st.args`` with ``n_positional`` quoted arguments, ``st.params`` with the
-    ``"type name" value`` pairs that follow (only done for the directives read here, so
-    other statements never need to be understood)."""
-    items, directive = st.items, st.directive
-    for k in range(n_positional):
-        it = items[k] if k < len(items) else None
-        if not (isinstance(it, Token) and it.kind == "str"):
-            raise SpectrumError(f"{directive.where}: {directive.text} needs a quoted "
-                                f"type name as argument {k + 1}")
-        st.args.append(it)
-    k = n_positional
-    while k < len(items):
-        decl = items[k]
-        if not (isinstance(decl, Token) and decl.kind == "str" and _PARAM_DECL.match(decl.text)):
-            where = decl.where if isinstance(decl, Token) else (decl[0].where if decl else directive.where)
-            got = decl.text if isinstance(decl, Token) else "[...]"
-            raise SpectrumError(f"{where}: expected a parameter \"type name\" in "
-                                f"{directive.text}, got {got!r}")
-        if k + 1 >= len(items):
-            raise SpectrumError(f"{decl.where}: parameter \"{decl.text}\" has no value")
-        ptype, pname = _PARAM_DECL.match(decl.text).groups()
-        val = items[k + 1]
-        st.params.append(_Param(ptype, pname, val if isinstance(val, list) else [val], decl))
-        k += 2
-    return st
-
-
-# --------------------------------------------------------------------------------------
-# Spectra of emitter parameters
-# --------------------------------------------------------------------------------------
 
 def named_spectrum(name: str, where: str) -> Spectrum:
     """A pbrt-v4 named illuminant spectrum (``stdillum-D65`` ...) from colour-science."""
@@ -314,7 +157,7 @@ def _resolve(name: str, including: Path, top: Path) -> Path:
     return Path(os.path.normpath(including.parent / p))
 
 
-def _param_spectrum(param: _Param, path: Path, top: Path) -> tuple[Spectrum | None, str]:
+def _param_spectrum(param: Param, path: Path, top: Path) -> tuple[Spectrum | None, str]:
     """The spectrum of an emitter parameter, or (None, reason) when it has none."""
     where = param.where
     if param.type == "rgb":
@@ -396,7 +239,7 @@ def scan_scene(path: str | Path) -> list[Emitter]:
     state: dict = {"area": None, "light_defaults": [], "colorspace": "srgb"}
     stack: list[dict] = []
 
-    def emitter(st: _Statement, kind: str) -> Emitter:
+    def emitter(st: Statement, kind: str) -> Emitter:
         type_ = st.args[0].text
         desc = f'{kind} "{type_}"'
         where = st.directive.where
@@ -507,6 +350,14 @@ def scene_spectra(path: str | Path, lo: float = 380.0, hi: float = 780.0) -> lis
         named.append(Spectrum(name=name, source=sp.source, wavelengths=sp.wavelengths,
                               values=sp.values))
     return named
+
+
+def read_scene(path: str | Path, selector: str | None, lo: float = 380.0,
+               hi: float = 780.0) -> list[Spectrum]:
+    """The reader ``spectra.load_spectra`` uses for ``.pbrt``: the scene's emitter spectra,
+    or the one ``selector`` (``N`` or ``NAME``) picks."""
+    sps = scene_spectra(path, lo=lo, hi=hi)
+    return sps if selector is None else [select_emitter(sps, selector, path)]
 
 
 def select_emitter(spectra: list[Spectrum], selector: str, scene: str | Path) -> Spectrum:

@@ -1,9 +1,9 @@
-"""Lamp spectra: one type, and readers for every form users have them in (SPEC 3).
+"""Lamp spectra: one type, and readers for every form users have them in (design §3).
 
 A :class:`Spectrum` is a piecewise-linear function of wavelength, kept at the resolution it
 was measured at (never resampled to a table grid) and zero outside its samples.
 
-Spectra are named by a *spec* string (SPEC 7):
+Spectra are named by a *spec* string (design §7):
 
 - ``cie:NAME``  -- a standard illuminant that colour-science ships (``colour.SDS_ILLUMINANTS``:
   A, D65, FL1-FL12, HP1-HP5, LED-B1, ...);
@@ -26,8 +26,11 @@ import re
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
+
+from wavelength_pdf.model import RANGE
 
 __all__ = [
     "Spectrum",
@@ -41,10 +44,12 @@ __all__ = [
     "read_lspdd_csv",
     "cie_illuminant",
     "light_source",
+    "READERS",
+    "register_reader",
 ]
 
-#: The wavelength range of the default table grid, nm (SPEC 1: 380, 385, ..., 780 nm).
-VISIBLE_RANGE: tuple[float, float] = (380.0, 780.0)
+#: The wavelength range of the default table grid, nm (design §1).
+VISIBLE_RANGE: tuple[float, float] = RANGE
 
 
 class SpectrumError(ValueError):
@@ -368,6 +373,31 @@ def read_lspdd_csv(path: str | Path, lo: float | None = 380.0,
 # Dispatch
 # --------------------------------------------------------------------------------------
 
+#: Spectrum readers by file suffix: a function ``(path, selector, lo, hi) -> [Spectrum]`` or
+#: ``"module:function"``, imported on first use (the scene reader builds on this module, so
+#: naming it keeps the imports one-way). ``register_reader`` adds one.
+READERS: dict[str, Any] = {
+    ".csv": lambda path, sel, lo, hi: [read_lspdd_csv(path, lo, hi)],
+    ".spd": lambda path, sel, lo, hi: [read_spd(path, lo, hi)],
+    ".pbrt": "wavelength_pdf.scene_spectra:read_scene",
+}
+
+
+def register_reader(suffix: str, reader: Callable[..., list] | str) -> None:
+    """Read files ending in ``suffix`` with ``reader(path, selector, lo, hi)``."""
+    READERS[suffix.lower()] = reader
+
+
+def _reader(suffix: str) -> Callable[..., list]:
+    reader = READERS[suffix]
+    if isinstance(reader, str):
+        import importlib
+
+        module, _, name = reader.partition(":")
+        reader = READERS[suffix] = getattr(importlib.import_module(module), name)
+    return reader
+
+
 def _split_selector(spec: str) -> tuple[str, str | None]:
     """``scene.pbrt#1`` -> (``scene.pbrt``, ``1``); other specs are returned unchanged."""
     if "#" in spec:
@@ -402,21 +432,12 @@ def load_spectra(spec: str, lo: float = 380.0, hi: float = 780.0) -> list[Spectr
     else:
         base, sel = _split_selector(spec)
         suffix = Path(base).suffix.lower()
-        if suffix == ".pbrt":
-            from wavelength_pdf import scene_spectra
-
-            sps = scene_spectra.scene_spectra(base, lo=lo, hi=hi)
-            if sel is not None:
-                sps = [scene_spectra.select_emitter(sps, sel, base)]
-            return sps
-        if suffix == ".spd":
-            return [read_spd(base, lo, hi)]
-        if suffix == ".csv":
-            return [read_lspdd_csv(base, lo, hi)]
-        if not Path(base).exists():
-            raise SpectrumError(f"{base}: no such file (and not cie:NAME or lamp:NAME)")
-        raise SpectrumError(f"{base}: unknown spectrum format '{suffix or '(none)'}' "
-                            f"(expected .csv (LSPDD), .spd, .pbrt, cie:NAME or lamp:NAME)")
+        if suffix not in READERS:
+            if not Path(base).exists():
+                raise SpectrumError(f"{base}: no such file (and not cie:NAME or lamp:NAME)")
+            raise SpectrumError(f"{base}: unknown spectrum format '{suffix or '(none)'}' "
+                                f"(expected {', '.join(READERS)}, cie:NAME or lamp:NAME)")
+        return _reader(suffix)(base, sel, lo, hi)
     for sp in sps:
         check_support(sp, lo, hi)
     return sps

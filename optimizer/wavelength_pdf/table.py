@@ -32,12 +32,12 @@ import numpy as np
 __all__ = ["Table", "TableError", "read_table", "write_table", "normalize", "N_DENSITIES",
            "HEADER", "GRID_4X81"]
 
-#: Number of densities in a table (SPEC 1).
-N_DENSITIES = 4
+from wavelength_pdf.model import N_DENSITIES, RANGE, trapezoid
+
 #: Column header of the CSV layout (SPEC 2).
 HEADER = "lambda_nm,pdf0,pdf1,pdf2,pdf3"
 #: Grid of the headerless 4 x 81 layout: 380..780 nm in 5 nm steps (SPEC 2).
-GRID_4X81 = np.linspace(380.0, 780.0, 81)
+GRID_4X81 = np.linspace(RANGE[0], RANGE[1], 81)
 
 
 class TableError(ValueError):
@@ -64,9 +64,7 @@ class Table:
     comments: list[str] = field(default_factory=list)
 
 
-def _trapezoid(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Trapezoid integral along the last axis (exact for piecewise-linear densities)."""
-    return np.sum(0.5 * (values[..., 1:] + values[..., :-1]) * np.diff(grid), axis=-1)
+_trapezoid = trapezoid
 
 
 def normalize(grid: np.ndarray, pdfs: np.ndarray) -> np.ndarray:

@@ -1,9 +1,9 @@
-"""The wavelength-pdf command (SPEC 7): help, bad input, writing tables, batch, show.
+"""The wavelength-pdf command (design §7): help, bad input, writing tables, batch, show.
 
 Most tests call ``cli.main(argv)`` in-process. The command's own logic (what is written,
-when, with which header; exit statuses; resuming) is tested with a stand-in optimizer that
-returns the package's real initialization (a valid table) with made-up J values, so these
-tests do not depend on how long a real optimization takes. The end-to-end tests at the bottom run the real
+when, with which header; exit statuses; resuming) is tested with a stand-in for the solver
+run: the package's initialization, scored by the real ``evaluate_table``, so these tests do
+not depend on how long a real optimization takes. The end-to-end tests at the bottom run the real
 optimizer (and the installed console script) on a tiny problem.
 """
 from __future__ import annotations
@@ -12,7 +12,6 @@ import csv
 import os
 import subprocess
 import sys
-import types
 import warnings
 from pathlib import Path
 
@@ -20,6 +19,7 @@ import numpy as np
 import pytest
 
 from wavelength_pdf import cli
+from wavelength_pdf.result import read_header
 from wavelength_pdf.table import Table, read_table, write_table
 
 REPO = Path(__file__).resolve().parents[2]
@@ -29,40 +29,31 @@ CONSOLE = Path(sys.executable).parent / "wavelength-pdf"
 
 # --- a stand-in optimizer ------------------------------------------------------------
 
-class _Health:
-    def __init__(self, accepted: bool):
-        self.bias_rel = 1e-12
-        self.std_rel = np.array([0.1, 0.2, 0.3])
-        self.accepted = accepted
-        self.reason = "" if accepted else "std worse than the initialization"
-
-
 def _fake_optimizer(monkeypatch, accepted: bool = True) -> list:
-    """Install a stand-in wavelength_pdf.optimize; returns the list of spectra it saw."""
-    from wavelength_pdf import init, objective
+    """Replace the solver run by the package's initialization, scored by the real
+    ``evaluate_table`` (so the record, its acceptance and its header are the real ones);
+    ``accepted=False`` scores a table that drops every density below 500 nm (biased).
+    Returns the list of spectra it saw."""
+    from wavelength_pdf import init, objective, optimize
 
     calls: list = []
 
-    def optimize_spectrum(spectrum, grid, solver="default", seed=0, progress=None,
-                          max_seconds=None):
+    def optimize_spectrum(spectrum, grid="auto", solver=None, seed=0, progress=None,
+                          max_seconds=None, solver_options=None):
         calls.append(spectrum.name)
         if isinstance(grid, str):  # "auto": the stand-in keeps the default 5 nm grid
             grid = np.arange(380.0, 781.0, 5.0)
-        problem = objective.make_problem(spectrum, grid)
-        P = init.equal_mass_partition(problem)
-        j = 0.5 + 0.001 * len(calls)  # distinct per call, to check what gets written where
+        P = init.equal_mass_partition(objective.make_problem(spectrum, grid))
+        if not accepted:
+            P = np.where(np.asarray(grid)[None, :] < 500.0, 0.0, P + 1e-3)
         if progress is not None:
-            progress(1, 2 * j)
-            progress(2, j)
-        return types.SimpleNamespace(
-            table=Table(grid=np.asarray(grid), pdfs=P), J=j, J_fine=j * (1 + 1e-9),
-            J_uniform=10 * j, J_init=2 * j, health=_Health(accepted),
-            health_init=_Health(True), solver=solver or "default", seconds=0.01, history=[j],
-            accepted=accepted, message="stand-in")
+            progress(1, 2.0)
+            progress(2, 1.0)
+        r = optimize.evaluate_table(spectrum, Table(grid=np.asarray(grid), pdfs=P))
+        r.solver, r.seed, r.message = solver or "stand-in", seed, "stand-in"
+        return r
 
-    mod = types.ModuleType("wavelength_pdf.optimize")
-    mod.optimize_spectrum = optimize_spectrum
-    monkeypatch.setitem(sys.modules, "wavelength_pdf.optimize", mod)
+    monkeypatch.setattr(optimize, "optimize_spectrum", optimize_spectrum)
     return calls
 
 
@@ -156,14 +147,18 @@ def test_optimize_writes_table_with_header(tmp_path, capsys, monkeypatch):
     assert code == 0 and calls == ["FL2"]
     t = read_table(out)
     np.testing.assert_array_equal(t.grid, np.arange(380.0, 781.0, 5.0))
-    hdr = cli.read_header(t)
+    hdr = read_header(t)
     assert hdr["name"] == "FL2" and hdr["source"] == "cie:FL2" and hdr["seed"] == "3"
     for key in ("J_uniform", "J_init", "J", "J_fine", "bias_rel", "std_rel", "solver",
                 "seconds", "version"):
         assert key in hdr, f"{key} missing from the header: {hdr}"
-    assert float(hdr["J"]) == 0.501 and float(hdr["J_uniform"]) == 5.01
-    assert float(hdr["J_init"]) == 1.002 and float(hdr["J_fine"]) == 0.501 * (1 + 1e-9)
-    assert hdr["std_rel"] == "[0.1, 0.2, 0.3]" and hdr["accepted"] == "True"
+    from wavelength_pdf import evaluate_table, load_spectrum
+
+    ev = evaluate_table(load_spectrum("cie:FL2"), t)
+    assert float(hdr["J"]) == ev.J and float(hdr["J_uniform"]) == ev.J_uniform
+    assert float(hdr["J_init"]) == ev.J_init and float(hdr["J_fine"]) == ev.J_fine
+    assert hdr["std_rel"] == "[" + ", ".join(repr(float(v)) for v in ev.std_rel) + "]"
+    assert hdr["accepted"] == "True"
     line = capsys.readouterr().out.strip()
     assert line.startswith("FL2: J ") and "accepted" in line and str(out) in line
     assert len(line.splitlines()) == 1
@@ -175,22 +170,38 @@ def test_not_accepted_is_not_written(tmp_path, capsys, monkeypatch):
     assert cli.main(["optimize", "cie:FL2", "-o", str(out), "--quiet"]) == 1
     assert not out.exists()
     err = capsys.readouterr().err
-    assert "not accepted" in err and "std worse than the initialization" in err
+    assert "not accepted" in err and "relative bias" in err
 
 
-def test_scene_with_several_emitters_writes_one_table_each(tmp_path, monkeypatch):
+def test_scene_with_several_emitters_writes_one_table_each(tmp_path, monkeypatch, capsys):
+    """One table per emitter, by name or by index; an emitter whose table is not accepted
+    (here the stand-in's equal-mass table for the blackbody, worse than uniform) gets none,
+    and the exit status says so."""
+    from wavelength_pdf import evaluate_table
+    from wavelength_pdf.spectra import load_spectra
+
     calls = _fake_optimizer(monkeypatch)
+    scene = DATA / "scenes" / "several.pbrt"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        assert cli.main(["optimize", str(DATA / "scenes" / "several.pbrt"), "-o",
-                         f"{tmp_path}/tables/", "--quiet"]) == 0
-        assert cli.main(["optimize", str(DATA / "scenes" / "several.pbrt"), "-o",
-                         f"{tmp_path}/p-{{index}}.csv", "--quiet"]) == 0
+        codes = [cli.main(["optimize", str(scene), "-o", f"{tmp_path}/tables/", "--quiet"]),
+                 cli.main(["optimize", str(scene), "-o", f"{tmp_path}/p-{{index}}.csv",
+                           "--quiet"])]
+        spectra = load_spectra(str(scene))
     names = ["several-line3", "tiny", "blackbody-5000K", "stdillum-F2"]
-    assert calls == names * 2
-    for i, n in enumerate(names):
-        assert cli.read_header(read_table(tmp_path / "tables" / f"{n}.csv"))["name"] == n
-        assert cli.read_header(read_table(tmp_path / f"p-{i}.csv"))["name"] == n
+    assert calls == names * 2 and [s.name for s in spectra] == names
+    ok = []
+    for i, (n, sp) in enumerate(zip(names, spectra)):
+        by_name, by_index = tmp_path / "tables" / f"{n}.csv", tmp_path / f"p-{i}.csv"
+        assert by_name.exists() == by_index.exists()
+        if by_name.exists():
+            assert read_header(read_table(by_name))["name"] == n
+            assert read_header(read_table(by_index))["name"] == n
+            ok.append(n)
+        else:
+            assert f"{n}: result not accepted" in capsys.readouterr().err
+    assert "tiny" in ok and "blackbody-5000K" not in ok
+    assert codes == [0 if len(ok) == 4 else 1] * 2
 
 
 def test_colour_bar_and_plot_are_pngs(tmp_path, monkeypatch):
@@ -244,7 +255,7 @@ def test_batch_tables_summary_and_resume(tmp_path, monkeypatch, capsys):
         r = rows[name]
         assert r["status"] == "written" and r["accepted"] == "True"
         t = read_table(r["table"])
-        assert cli.read_header(t)["J"] == r["J"]
+        assert read_header(t)["J"] == r["J"]
     assert sorted(p.name for p in out.iterdir()) == ["summary.csv", "tiny-lspdd.csv", "tiny.csv"]
 
     # Second run: nothing to do; the summary is rebuilt from the tables' headers.
@@ -305,25 +316,20 @@ def test_show_prints_grid_normalization_and_J(tmp_path, capsys):
 # --- end to end with the real optimizer ----------------------------------------------
 
 def test_optimize_end_to_end(tmp_path):
-    """The real optimizer on a small problem (short budget): a valid table, no worse than
+    """The real optimizer on a small problem (60 evaluations): a valid table, no worse than
     the initialization, whose header states the J of the table written."""
-    pytest.importorskip("wavelength_pdf.optimize")
-    if "wavelength_pdf.optimize" in sys.modules and not hasattr(
-            sys.modules["wavelength_pdf.optimize"], "__file__"):
-        pytest.skip("stand-in optimizer still installed")
     out = tmp_path / "t.csv"
-    code = cli.main(["optimize", str(REPO / "spectra" / "tri-band-fluorescent.spd"), "-o",
-                     str(out), "--grid-step", "20", "--max-seconds", "3", "--quiet"])
+    code = cli.main(["optimize", "cie:D65", "-o", str(out), "--grid-step", "20",
+                     "--max-evals", "60", "--quiet"])
     assert code == 0
     t = read_table(out)
     assert t.grid.size == 21
-    hdr = cli.read_header(t)
-    assert hdr["name"] == "tri-band-fluorescent" and hdr["accepted"] == "True"
+    hdr = read_header(t)
+    assert hdr["name"] == "D65" and hdr["accepted"] == "True"
     assert float(hdr["J"]) <= float(hdr["J_init"]) * (1 + 1e-12)
     from wavelength_pdf import objective
     from wavelength_pdf.spectra import load_spectrum
 
-    problem = objective.make_problem(load_spectrum(str(REPO / "spectra" /
-                                                       "tri-band-fluorescent.spd")), t.grid)
+    problem = objective.make_problem(load_spectrum("cie:D65"), t.grid)
     assert objective.J(problem, t.pdfs) == pytest.approx(float(hdr["J"]), rel=1e-9), \
         "the header's J is the J of the written table"

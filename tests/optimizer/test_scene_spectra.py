@@ -19,7 +19,9 @@ from wavelength_pdf.spectra import SpectrumError, load_spectra, load_spectrum, r
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "tests" / "data" / "scenes"
 SPECTRA = REPO / "tests" / "data" / "spectra"
-SHARED_SCENES = REPO.parent / "shared" / "scenes"
+from repo_paths import SHARED  # noqa: E402
+
+SHARED_SCENES = SHARED / "scenes"
 
 
 def _spectra(name: str):

@@ -76,14 +76,15 @@ def test_optimize_spectrum_returns_an_accepted_result():
     assert abs(r.J - r.J_fine) < 1e-3 * r.J
     assert isinstance(r.table, Table) and r.table.pdfs.shape == (4, GRID.size)
     np.testing.assert_array_equal(r.table.grid, GRID)
-    text = "\n".join(r.table.comments)
+    text = "\n".join(r.to_table().comments)
     for key in ("J_uniform", "J_init", "J_fine", "bias_rel", "std_rel", "solver: multistage", "test:lamp"):
         assert key in text
     assert r.health.accepted(r.health_init) and len(r.history) > 0 and r.seconds > 0
     # Scoring the written table gives the same numbers.
     ev = evaluate_table(_lamp(), r.table)
-    assert ev["J"] == pytest.approx(r.J, rel=1e-12) and ev["accepted"]
-    assert ev["J_uniform"] == pytest.approx(r.J_uniform, rel=1e-12)
+    assert isinstance(ev, Result) and ev.accepted
+    assert ev.J == pytest.approx(r.J, rel=1e-12)
+    assert ev.J_uniform == pytest.approx(r.J_uniform, rel=1e-12)
 
 
 def test_optimize_spectrum_rejects_unknown_solver_and_grid():

@@ -20,7 +20,7 @@ from wavelength_pdf.spectra import (
 
 REPO = Path(__file__).resolve().parents[2]
 DATA = REPO / "tests" / "data" / "spectra"
-SHARED = REPO.parent / "shared"
+from repo_paths import SHARED  # noqa: E402
 LSPDD = SHARED / "spectra" / "lspdd"
 
 
@@ -246,3 +246,24 @@ def test_shipped_spectra():
     assert abs(led.wavelengths[np.argmax(led.values)] - 450.0) <= 1.0
     na = load_spectrum(str(REPO / "spectra" / "sodium-2nm-line.spd"))
     assert np.all(na(np.arange(380.0, 781.0, 5.0)) == 0.0), "zero at every 5 nm node"
+
+
+def test_reader_registry_dispatches_by_suffix(tmp_path, monkeypatch):
+    """A registered reader gets (path, selector, lo, hi); unknown suffixes list the known."""
+    from wavelength_pdf import spectra as sp_mod
+
+    monkeypatch.setattr(sp_mod, "READERS", dict(sp_mod.READERS))
+    seen = []
+
+    def reader(path, selector, lo, hi):
+        seen.append((path, selector, lo, hi))
+        return [sp_mod.make_spectrum("two", path, [400.0, 700.0], [1.0, 1.0])]
+
+    sp_mod.register_reader(".TWO", reader)
+    f = tmp_path / "a.two"
+    f.write_text("")
+    assert [s.name for s in sp_mod.load_spectra(str(f), lo=390.0, hi=710.0)] == ["two"]
+    assert seen == [(str(f), None, 390.0, 710.0)]
+    (tmp_path / "b.xyz").write_text("")
+    with pytest.raises(sp_mod.SpectrumError, match=r"unknown spectrum format '\.xyz'.*\.two"):
+        sp_mod.load_spectra(str(tmp_path / "b.xyz"))

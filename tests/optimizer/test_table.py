@@ -11,7 +11,9 @@ from wavelength_pdf import table as table_mod
 from wavelength_pdf.table import HEADER, Table, TableError, read_table, write_table
 
 REPO = Path(__file__).resolve().parents[2]
-REFERENCE = REPO.parent / "shared" / "tables" / "reference-4x81"
+from repo_paths import SHARED  # noqa: E402
+
+REFERENCE = SHARED / "tables" / "reference-4x81"
 
 
 def _trapezoid(grid, pdfs):

@@ -32,7 +32,7 @@ import pytest
 from wavelength_pdf.exr import read_rgb
 
 REPO = Path(__file__).resolve().parents[2]
-SHARED = REPO.parent / "shared"   # read-only, beside the repository (may be absent)
+from repo_paths import SHARED  # noqa: E402  (read-only; may be absent)
 SCENE = REPO / "scenes" / "cornell-box" / "scene.pbrt"
 OPTIMIZED = REPO / "tests" / "data" / "tables" / "tri-band-fluorescent-optimized.csv"
 REFERENCE_DIR = SHARED / "tables" / "reference-4x81"

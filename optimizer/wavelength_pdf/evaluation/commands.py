@@ -10,20 +10,22 @@ import argparse
 import itertools
 import shutil
 import sys
+import time
 from pathlib import Path
-
-from tqdm import tqdm
 
 from wavelength_pdf import plots
 from wavelength_pdf.evaluation import report
 from wavelength_pdf.evaluation.protocol import DEFAULT_METHODS, DEFAULT_SPP, Config, evaluate, write_rows
-from wavelength_pdf.evaluation.render import DEFAULT_PBRT, REPO
+from wavelength_pdf import data, progress
+from wavelength_pdf.evaluation.render import PBRT_ENV, REPO, find_pbrt
 from wavelength_pdf.produce import safe_name
 from wavelength_pdf.spectra import load_spectrum
 from wavelength_pdf.table import read_table
 
-DEMO_SCENE = REPO / "scenes" / "cornell-box" / "scene.pbrt"
-DEMO_SPECTRUM = REPO / "spectra" / "tri-band-fluorescent.spd"
+DEMO_SCENE = data.demo_scene()
+DEMO_SPECTRUM = data.demo_spectrum()
+#: Default output folders: under the checkout, or the current folder when installed.
+OUT = (REPO if data.in_checkout() else Path.cwd()) / "out"
 
 
 def _resolution(text: str) -> tuple[int, int]:
@@ -72,7 +74,9 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
                    help="wavelength range of the table and of every sampler, nm (default 380 780)")
     p.add_argument("--seed", type=int, default=1, help="renderer seed of the compared images")
     p.add_argument("--nthreads", type=int, default=None, help="renderer threads (default: all cores)")
-    p.add_argument("--pbrt", type=Path, default=DEFAULT_PBRT, help=f"renderer binary (default {DEFAULT_PBRT})")
+    p.add_argument("--pbrt", type=Path, default=None,
+                   help=f"renderer binary (default: ${PBRT_ENV}, else the checkout's build/pbrt, "
+                        "else pbrt on PATH)")
 
 
 def _renderer(p: argparse.ArgumentParser) -> None:
@@ -117,7 +121,7 @@ def add_subcommands(sub) -> None:
                                      "further smooth spectrum. Scenes and spectra come from --shared.")
     pub.add_argument("--shared", type=Path, default=REPO.parent / "shared",
                      help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the repository)")
-    pub.add_argument("-o", "--outdir", type=Path, default=REPO / "out" / "published",
+    pub.add_argument("-o", "--outdir", type=Path, default=OUT / "published",
                      help="output folder (default out/published)")
     pub.add_argument("--only", nargs="+", default=None, metavar="SCENE/SPECTRUM",
                      help="run only these jobs, e.g. cornell-box/2482")
@@ -132,7 +136,7 @@ def add_subcommands(sub) -> None:
                                     "(no ../shared needed)",
                        description="Optimizes a table for spectra/tri-band-fluorescent.spd, renders "
                                    "scenes/cornell-box with each sampler and prints the comparison.")
-    d.add_argument("-o", "--outdir", type=Path, default=REPO / "out" / "demo", help="output folder (default out/demo)")
+    d.add_argument("-o", "--outdir", type=Path, default=OUT / "demo", help="output folder (default out/demo)")
     d.add_argument("--scene", type=Path, default=DEMO_SCENE, help="scene (default: the project's Cornell box)")
     d.add_argument("--spectrum", default=str(DEMO_SPECTRUM), help="spectrum (default: the tri-band lamp)")
     d.add_argument("--table", type=Path, default=None, help="use this table instead of optimizing one")
@@ -159,7 +163,7 @@ def _config(args) -> Config:
         raise ValueError(f"--seeds must be at least 1, got {args.seeds}")
     return Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp, truth_method=args.truth_method,
                   resolution=resolution, seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
-                  lo=args.range[0], hi=args.range[1], pbrt=args.pbrt)
+                  lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt))
 
 
 def _images(config: Config) -> int:
@@ -167,7 +171,7 @@ def _images(config: Config) -> int:
 
 
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
-            bar: tqdm | None = None, renderer: str = "pbrt"):
+            bar=None, renderer: str = "pbrt"):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
     spectrum = load_spectrum(spectrum_spec, lo=config.lo, hi=config.hi)
 
@@ -177,11 +181,26 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
             if msg.startswith(tuple(config.methods)):
                 bar.update(1)
 
+    from wavelength_pdf.optimize import evaluation_budget
+
+    total = evaluation_budget()
+    shown = [0.0]
+
+    def optimizing(step: int, J: float) -> None:
+        # The table's optimization, shown on the same bar (at most twice a second).
+        now = time.monotonic()
+        if bar is not None and (now - shown[0] > 0.5 or step >= total):
+            shown[0] = now
+            bar.set_postfix_str(f"{outdir.name}: optimizing the table, {min(step, total)}/{total} "
+                                f"evaluations, J {J:.4g}", refresh=True)
+
     if renderer == "mitsuba":
         from wavelength_pdf.evaluation import render_mitsuba
-        ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say)
+        ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
+                                     optimizer_progress=optimizing)
     else:
-        ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say)
+        ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say,
+                      optimizer_progress=optimizing)
     title = f"{ev.rows[0].scene} under {spectrum.name}"
     report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
     report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
@@ -195,7 +214,7 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
 
 def cmd_evaluate(args) -> int:
     config = _config(args)
-    with tqdm(total=_images(config), desc="evaluate", file=sys.stderr, unit="image") as bar:
+    with progress.bar(total=_images(config), desc="evaluate", file=sys.stderr, unit="image") as bar:
         ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar, args.renderer)
     print(report.markdown_table(ev.rows))
     print(f"results: {args.outdir / 'results.csv'}; plots: {args.outdir}/*.png")
@@ -212,7 +231,7 @@ def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: 
         if not Path(scene).is_file():
             raise FileNotFoundError(2, "no such scene file", str(scene))
     done = []
-    with tqdm(total=len(jobs) * _images(config), desc="grid", file=sys.stderr, unit="image") as bar:
+    with progress.bar(total=len(jobs) * _images(config), desc="grid", file=sys.stderr, unit="image") as bar:
         for scene, spec in jobs:
             folder = _job_dir(outdir, Path(scene), spec)
             done.append((folder, run_one(Path(scene), spec, folder, config, None, bar).rows))
@@ -292,7 +311,7 @@ def cmd_demo(args) -> int:
         args.scene = DEMO_SCENE.with_suffix(".xml")
     print(f"demo: {args.scene.relative_to(REPO) if args.scene.is_relative_to(REPO) else args.scene} "
           f"lit by {args.spectrum}; output in {args.outdir}", file=sys.stderr)
-    with tqdm(total=_images(config), desc="demo", file=sys.stderr, unit="image") as bar:
+    with progress.bar(total=_images(config), desc="demo", file=sys.stderr, unit="image") as bar:
         ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar, args.renderer)
     print(report.markdown_table(ev.rows))
     print(f"table: {ev.table}\nresults: {args.outdir / 'results.csv'}\n"

@@ -49,7 +49,8 @@ class Config:
     nthreads: int | None = None
     lo: float = 380.0
     hi: float = 780.0
-    pbrt: Path = rendering.DEFAULT_PBRT
+    #: The renderer; None: :func:`render.find_pbrt`'s lookup.
+    pbrt: Path | None = None
 
 
 @dataclass
@@ -81,31 +82,39 @@ class Evaluation:
     error_maps: dict[tuple[str, int], np.ndarray] = field(default_factory=dict)
 
 
-def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: float | str = "auto") -> Path:
+def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: float | str = "auto",
+                 progress: Callable[[int, float], None] | None = None) -> Path:
     """The spectrum's optimized table at ``path``, optimized only when it is not there yet."""
     if path.is_file():
         read_table(path)  # a damaged cache is an error, not silently reused
         return path
     from wavelength_pdf.produce import make_grid, optimize_one
 
-    outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, None)
+    outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, progress)
     if not outcome.written:
         raise RuntimeError(f"{spectrum.source}: the optimized table was not accepted "
-                           f"({getattr(outcome.result, 'message', '')})")
+                           f"({outcome.result.reason})")
     return path
 
 
 def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Config(), *,
              table: Path | None = None, scene_name: str | None = None,
-             progress: Callable[[str], None] | None = None) -> Evaluation:
-    """Run the protocol; returns the rows (also written to ``outdir/results.csv``)."""
+             progress: Callable[[str], None] | None = None,
+             optimizer_progress: Callable[[int, float], None] | None = None) -> Evaluation:
+    """Run the protocol; returns the rows (also written to ``outdir/results.csv``).
+
+    ``progress`` hears what is being rendered; ``optimizer_progress(step, J)`` follows the
+    table's optimization when there is one to do."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda msg: None)
     ev = Evaluation()
     ev.scene = edit_scene(scene, spectrum, outdir / "scene.pbrt", lo=config.lo, hi=config.hi,
                           resolution=config.resolution)
-    ev.table = table or ensure_table(spectrum, outdir / "table.csv", config.lo, config.hi)
+    if table is None:
+        say("optimizing the table")
+    ev.table = table or ensure_table(spectrum, outdir / "table.csv", config.lo, config.hi,
+                                     progress=optimizer_progress)
     samplers = rendering.samplers(ev.table, config.lo, config.hi)
     unknown = set(config.methods) - set(samplers)
     if unknown:

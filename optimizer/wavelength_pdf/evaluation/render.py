@@ -9,14 +9,64 @@ import hashlib
 import json
 import os
 import re
+import shutil
 import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-REPO = Path(__file__).resolve().parents[3]
-DEFAULT_PBRT = REPO / "build" / "pbrt"
+from wavelength_pdf.data import CHECKOUT, in_checkout
+
+REPO = CHECKOUT
+#: The checkout's own build of the renderer (scripts/setup.sh).
+CHECKOUT_PBRT = CHECKOUT / "build" / "pbrt"
+#: Environment variable naming the renderer binary.
+PBRT_ENV = "WAVELENGTH_PDF_PBRT"
+#: Kept for callers that name the default: lookup happens in :func:`find_pbrt`.
+DEFAULT_PBRT = None
+
+
+class RendererNotFound(FileNotFoundError):
+    """No renderer binary where :func:`find_pbrt` looked; the message lists the places."""
+
+
+def find_pbrt(explicit: str | os.PathLike | None = None) -> Path:
+    """The renderer binary: ``explicit`` (``--pbrt``), else ``$WAVELENGTH_PDF_PBRT``, else the
+    checkout's ``build/pbrt``, else ``pbrt`` on ``PATH``.
+
+    Raises
+    ------
+    RendererNotFound
+        Nothing executable was found; the message lists every place looked at.
+    """
+    looked: list[str] = []
+
+    def usable(p: Path) -> bool:
+        return p.is_file() and os.access(p, os.X_OK)
+
+    if explicit is not None:
+        p = Path(explicit)
+        if usable(p):
+            return p
+        raise RendererNotFound(f"--pbrt {p}: not an executable file")
+    env = os.environ.get(PBRT_ENV)
+    if env:
+        if usable(Path(env)):
+            return Path(env)
+        looked.append(f"${PBRT_ENV}={env} (not an executable file)")
+    else:
+        looked.append(f"${PBRT_ENV} (not set)")
+    if in_checkout():
+        if usable(CHECKOUT_PBRT):
+            return CHECKOUT_PBRT
+        looked.append(f"{CHECKOUT_PBRT} (not built: bash scripts/setup.sh)")
+    on_path = shutil.which("pbrt")
+    if on_path:
+        return Path(on_path)
+    looked.append("pbrt on PATH (none)")
+    raise RendererNotFound("no renderer found; looked at: " + "; ".join(looked) +
+                           ". Give --pbrt PATH or set " + PBRT_ENV)
 
 
 class RenderError(RuntimeError):
@@ -33,7 +83,7 @@ class Sampler:
 
 
 def samplers(table: Path | None, lo: float, hi: float) -> dict[str, Sampler]:
-    """The samplers of SPEC 6: the baseline, pbrt-v4's default and the table."""
+    """The samplers of design §6: the baseline, pbrt-v4's default and the table."""
     out = {
         "uniform": Sampler("uniform", f"stratified uniform {lo:g}-{hi:g} nm",
                            ("--wavelength-sampling", "uniform", "--wavelength-range", f"{lo:g}", f"{hi:g}")),
@@ -89,7 +139,7 @@ _PERCENT = re.compile(rb"\]\s+(\d+)%")
 
 
 def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
-           nthreads: int | None = None, pbrt: Path = DEFAULT_PBRT, cache: bool = True,
+           nthreads: int | None = None, pbrt: Path | None = None, cache: bool = True,
            on_percent: Callable[[int], None] | None = None) -> Render:
     """Render ``scene`` to ``out`` (EXR) unless an identical render is already there.
 
@@ -98,6 +148,7 @@ def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
     ``on_percent`` follows a long render's progress (0-100).
     """
     out = Path(out)
+    pbrt = find_pbrt(pbrt)
     meta = out.with_suffix(".json")
     inputs = [scene, pbrt] + ([Path(sampler.args[-1])] if sampler.name == "table" else [])
     key = file_digest(*inputs, extra=json.dumps([sampler.args, spp, seed]))

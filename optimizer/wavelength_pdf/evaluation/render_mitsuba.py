@@ -227,6 +227,7 @@ def _scene_name(scene: Path) -> str:
 def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Config(), *,
              table: Path | None = None, scene_name: str | None = None,
              progress: Callable[[str], None] | None = None,
+             optimizer_progress: Callable[[int, float], None] | None = None,
              variant: str = DEFAULT_VARIANT) -> Evaluation:
     """The protocol of :func:`.protocol.evaluate` with Mitsuba 3 rendering; same rows and files."""
     outdir = Path(outdir)
@@ -237,7 +238,8 @@ def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Con
         raise ValueError(f"unknown methods {sorted(unknown)}; choose from uniform, visible, table")
     params = scene_params(scene, spectrum, config.lo, config.hi, config.resolution)  # checks the scene
     ev = Evaluation()
-    ev.table = table or ensure_table(spectrum, outdir / "table.csv", config.lo, config.hi)
+    ev.table = table or ensure_table(spectrum, outdir / "table.csv", config.lo, config.hi,
+                                     progress=optimizer_progress)
     read_table(ev.table)  # a bad table stops here, before any render
     scenes = {m: write_variant(scene, outdir / f"scene-{m}.xml", m, ev.table, config.lo, config.hi)
               for m in {*config.methods, config.truth_method}}

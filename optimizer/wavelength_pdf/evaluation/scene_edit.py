@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wavelength_pdf.scene_spectra import Token, split_params, statements, tokenize
+from wavelength_pdf.pbrt_syntax import Token, split_params, statements, tokenize
 from wavelength_pdf.spectra import Spectrum, SpectrumError
 
 #: Parameters whose string value names a file, relative to the file that names it.

@@ -1,0 +1,159 @@
+"""Every spectrum file of a folder to a table each, plus ``summary.csv``: parallel, resumable.
+
+The library side of ``wavelength-pdf batch``: :func:`plan_batch` lists the work,
+:func:`run_batch` keeps tables newer than their input, optimizes the rest (in worker
+processes when asked) and writes the summary, one :meth:`Result.summary_row` per input.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import multiprocessing
+import os
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from wavelength_pdf.produce import optimize_one
+from wavelength_pdf.result import SUMMARY_FIELDS, Result
+from wavelength_pdf.spectra import SpectrumError, load_spectra
+from wavelength_pdf.table import TableError, read_table
+
+#: File types ``batch`` picks up in a folder.
+SPECTRUM_SUFFIXES = (".csv", ".spd", ".pbrt")
+
+
+class BatchError(ValueError):
+    """A folder that cannot be batched (not a folder, no spectrum files)."""
+
+
+@dataclass
+class Item:
+    """One spectrum of the batch: its spec, the file it comes from and its table."""
+
+    spec: str
+    source: Path
+    out: Path
+
+
+def _row(input_: str, status: str, message: str = "", result: Result | None = None,
+         table: str = "") -> dict[str, Any]:
+    if result is not None:
+        return result.summary_row(input_, table, status, message)
+    row = {k: "" for k in SUMMARY_FIELDS}
+    row.update(input=input_, table=table, status=status, message=message)
+    return row
+
+
+def plan_batch(folder: Path, outdir: Path, lo: float, hi: float) -> tuple[list[Item], list[dict]]:
+    """An :class:`Item` for every spectrum in ``folder``, and summary rows for bad inputs.
+
+    A scene with several emitter spectra gives one item per emitter (``scene.pbrt#i``),
+    its tables named ``<stem>-<i>.csv``.
+    """
+    folder, outdir = Path(folder), Path(outdir)
+    if not folder.is_dir():
+        raise BatchError(f"{folder}: not a folder")
+    items: list[Item] = []
+    errors: list[dict] = []
+    files = sorted(p for p in folder.iterdir()
+                   if p.is_file() and p.suffix.lower() in SPECTRUM_SUFFIXES)
+    for f in files:
+        if f.suffix.lower() == ".pbrt":
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    n = len(load_spectra(str(f), lo=lo, hi=hi))
+            except SpectrumError as e:
+                errors.append(_row(str(f), "error", str(e)))
+                continue
+            if n == 1:
+                items.append(Item(str(f), f, outdir / f"{f.stem}.csv"))
+            else:
+                items += [Item(f"{f}#{i}", f, outdir / f"{f.stem}-{i}.csv") for i in range(n)]
+        else:
+            items.append(Item(str(f), f, outdir / f"{f.stem}.csv"))
+    return items, errors
+
+
+def run_job(job: dict[str, Any]) -> dict[str, Any]:
+    """One item, in this process or a worker: optimize, write, return its summary row."""
+    spec, out = job["spec"], Path(job["out"])
+    try:
+        lo, hi = job["range"]
+        sp = load_spectra(spec, lo=lo, hi=hi)
+        if len(sp) != 1:
+            raise SpectrumError(f"{spec}: expected one spectrum, got {len(sp)}")
+        grid = job["grid"] if isinstance(job["grid"], str) else np.asarray(job["grid"])
+        o = optimize_one(sp[0], out, grid, job["solver"], job["seed"], job["max_seconds"], None,
+                         max_evals=job.get("max_evals"))
+        if o.written:
+            return _row(spec, "written", "", o.result, str(out))
+        return _row(spec, "not accepted", o.result.reason, o.result)
+    except (SpectrumError, TableError, OSError, ValueError) as e:
+        return _row(spec, "error", str(e))
+
+
+def _init_worker() -> None:
+    """A worker's BLAS threads: one (several workers share the cores). XLA's thread count
+    comes with the parent's environment (``PJRT_NPROC``, :mod:`wavelength_pdf.threads`)."""
+    os.environ["OMP_NUM_THREADS"] = "1"
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+
+
+def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndarray | str,
+              solver: str | None, seed: int, max_seconds: float | None = None,
+              max_evals: int | None = None, jobs: int = 1, force: bool = False,
+              on_start: Callable[[int], None] | None = None,
+              on_row: Callable[[dict], None] | None = None) -> tuple[list[dict], Path]:
+    """Optimize every spectrum of ``folder`` into ``outdir``; returns the rows and summary.csv.
+
+    Resumable: a table newer than its input is kept and its header fills its row (status
+    ``kept``), unless ``force``. ``on_start(n)`` is told how many items will be optimized,
+    ``on_row(row)`` gets each finished row.
+    """
+    folder, outdir = Path(folder), Path(outdir)
+    items, rows = plan_batch(folder, outdir, lo, hi)
+    if not items and not rows:
+        raise BatchError(f"{folder}: no spectrum files ({', '.join(SPECTRUM_SUFFIXES)})")
+    outdir.mkdir(parents=True, exist_ok=True)
+    todo: list[dict[str, Any]] = []
+    for it in items:
+        if not force and it.out.is_file() and it.out.stat().st_mtime >= it.source.stat().st_mtime:
+            try:
+                kept = Result.from_table(read_table(it.out))
+                rows.append(_row(it.spec, "kept", "table newer than input", kept, str(it.out)))
+                continue
+            except TableError:
+                pass  # unreadable: redo it
+        todo.append({"spec": it.spec, "out": str(it.out), "range": (lo, hi),
+                     "grid": grid if isinstance(grid, str) else np.asarray(grid).tolist(),
+                     "solver": solver, "seed": seed, "max_seconds": max_seconds,
+                     "max_evals": max_evals})
+    if on_start is not None:
+        on_start(len(todo))
+    report = on_row or (lambda row: None)
+    if jobs <= 1 or len(todo) <= 1:
+        for job in todo:
+            rows.append(run_job(job))
+            report(rows[-1])
+    else:
+        # JAX is not fork-safe: workers are spawned (and inherit PJRT_NPROC).
+        ctx = multiprocessing.get_context("spawn")
+        with cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
+                                    initializer=_init_worker) as pool:
+            for fut in cf.as_completed([pool.submit(run_job, job) for job in todo]):
+                rows.append(fut.result())
+                report(rows[-1])
+    rows.sort(key=lambda r: r["input"])
+    summary = outdir / "summary.csv"
+    tmp = summary.with_name(f".{summary.name}.tmp")
+    with open(tmp, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=SUMMARY_FIELDS)
+        w.writeheader()
+        w.writerows(rows)
+    os.replace(tmp, summary)
+    return rows, summary

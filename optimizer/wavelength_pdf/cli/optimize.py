@@ -1,0 +1,111 @@
+"""``wavelength-pdf optimize``: one spectrum (or a scene's emitters) to a table each."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+from pathlib import Path
+from typing import Sequence
+
+from wavelength_pdf.cli import (EXIT_NOT_ACCEPTED, PROG, SPECTRUM_HELP, BadInput, Formatter,
+                                check_solver, range_args, solver_args)
+from wavelength_pdf.produce import make_grid, optimize_one, safe_name, summary_line
+from wavelength_pdf.spectra import Spectrum, load_spectra
+
+
+def output_paths(spectra: Sequence[Spectrum], out: str) -> list[Path]:
+    """Where each spectrum's table goes.
+
+    One spectrum: ``out`` itself (or ``out/<name>.csv`` if ``out`` is a directory). Several
+    (a scene with several emitters): ``out`` is a directory (existing, or ending in '/') that
+    gets ``<name>.csv`` each, or a pattern with ``{name}`` and/or ``{index}``.
+    """
+    pattern = "{name}" in out or "{index}" in out
+    is_dir = Path(out).is_dir() or out.endswith(("/", os.sep))
+    if len(spectra) == 1 and not pattern:
+        return [Path(out) / f"{safe_name(spectra[0].name)}.csv" if is_dir else Path(out)]
+    if pattern:
+        paths = [Path(out.format(name=safe_name(s.name), index=i)) for i, s in enumerate(spectra)]
+    elif is_dir:
+        paths = [Path(out) / f"{safe_name(s.name)}.csv" for s in spectra]
+    else:
+        names = ", ".join(s.name for s in spectra)
+        raise BadInput(f"{len(spectra)} emitter spectra ({names}) but -o {out} is one file: "
+                       f"give a directory (ending in '/') or a pattern with {{name}} or {{index}}")
+    if len(set(paths)) != len(paths):
+        raise BadInput(f"-o {out} gives the same file to several spectra: use {{index}}")
+    return paths
+
+
+def _suffix_path(path: str | None, spectrum: Spectrum, several: bool) -> Path | None:
+    """An image path, made distinct per spectrum when there are several."""
+    if path is None:
+        return None
+    if "{name}" in path:
+        return Path(path.replace("{name}", safe_name(spectrum.name)))
+    p = Path(path)
+    if not several:
+        return p
+    return p.with_name(f"{p.stem}-{safe_name(spectrum.name)}{p.suffix}")
+
+
+def budget(solver: str | None, grid, max_evals: int | None) -> int:
+    """The evaluation budget the progress bar counts against."""
+    from wavelength_pdf.optimize import DEFAULT_SOLVER, evaluation_budget
+
+    return evaluation_budget(solver or DEFAULT_SOLVER, grid,
+                             {"max_evals": max_evals} if max_evals else None)
+
+
+def cmd_optimize(args: argparse.Namespace) -> int:
+    from wavelength_pdf.progress import OptimizationProgress
+
+    lo, hi = args.range
+    grid = make_grid(lo, hi, args.grid_step)
+    check_solver(args.solver)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
+    for w in caught:
+        print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+    paths = output_paths(spectra, args.output)
+    several = len(spectra) > 1
+    total = budget(args.solver, grid, args.max_evals)
+    status = 0
+    for sp, path in zip(spectra, paths):
+        bar = OptimizationProgress(sp.name, total, enabled=not args.quiet)
+        try:
+            out = optimize_one(sp, path, grid, args.solver, args.seed, args.max_seconds, bar,
+                               _suffix_path(args.colour_bar, sp, several),
+                               _suffix_path(args.plot, sp, several), max_evals=args.max_evals)
+        finally:
+            bar.close()
+        print(summary_line(out.result, path if out.written else None))
+        if not out.written:
+            print(f"{PROG}: {sp.name}: result not accepted ({out.result.reason}); table not "
+                  "written", file=sys.stderr)
+            status = EXIT_NOT_ACCEPTED
+    return status
+
+
+def add_parser(sub, names: list[str]) -> None:
+    o = sub.add_parser("optimize", formatter_class=Formatter,
+                       help="optimize the wavelength table of a spectrum",
+                       description="Optimize four wavelength densities for SPECTRUM and "
+                                   "write them as a table (design §2) with a comment header. "
+                                   "A result that is not accepted (biased, a channel's std "
+                                   "worse than the initialization's, or J worse than "
+                                   "stratified uniform sampling's) is not written (exit 1).")
+    o.add_argument("spectrum", metavar="SPECTRUM", help=SPECTRUM_HELP)
+    o.add_argument("-o", "--output", required=True, metavar="TABLE",
+                   help="output table (.csv); for a scene with several emitters, a "
+                        "directory (ending in '/') or a pattern with {name} or {index}")
+    solver_args(o, names)
+    range_args(o)
+    o.add_argument("--colour-bar", "--color-bar", dest="colour_bar", metavar="PNG",
+                   help="also write a colour bar image: the estimated colour for every u "
+                        "(rows: initialization, result, target)")
+    o.add_argument("--plot", metavar="PNG",
+                   help="also write a plot of the four densities over the spectrum")
+    o.set_defaults(func=cmd_optimize)

@@ -1,0 +1,106 @@
+"""The package as a library: JAX's settings untouched, float64 results, the top-level API,
+``python -m wavelength_pdf``, the shipped data and the renderer lookup."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from wavelength_pdf import data
+from wavelength_pdf.evaluation import render
+
+REPO = Path(__file__).resolve().parents[2]
+
+_PROBE = r"""
+import jax
+before = {k: getattr(jax.config, k) for k in ("jax_enable_x64", "jax_default_matmul_precision")}
+import wavelength_pdf
+from wavelength_pdf import optimize_spectrum, read_table, write_table, evaluate_table, Result
+from wavelength_pdf import cli, optimize, objective, solvers, health, plots  # every module
+after = {k: getattr(jax.config, k) for k in before}
+assert before == after, (before, after)
+assert jax.numpy.ones(2).dtype == jax.numpy.float32, "x64 switched on globally"
+import numpy as np
+from wavelength_pdf.spectra import Spectrum
+wl = np.arange(380.0, 781.0, 10.0)
+sp = Spectrum("flat", "test:flat", wl, np.ones(wl.size))
+r = optimize_spectrum(sp, grid=np.linspace(380.0, 780.0, 21), solver_options={"max_evals": 20})
+assert r.table.pdfs.dtype == np.float64 and isinstance(r.J, float)
+ev = evaluate_table(sp, r.table)
+assert abs(ev.J - r.J) <= 1e-12 * r.J, (ev.J, r.J)
+assert jax.config.jax_enable_x64 is False and jax.numpy.ones(2).dtype == jax.numpy.float32
+print("ok", r.J)
+"""
+
+
+def test_import_leaves_jax_config_and_results_are_float64():
+    """In a fresh interpreter (the suite itself turns x64 on): import changes nothing in
+    jax.config; the optimizer still computes in float64 and reproduces its J."""
+    env = {k: v for k, v in os.environ.items() if k != "JAX_ENABLE_X64"}
+    proc = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True,
+                          env=env, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.startswith("ok")
+
+
+def test_python_dash_m_runs_the_command():
+    proc = subprocess.run([sys.executable, "-m", "wavelength_pdf", "--version"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and proc.stdout.startswith("wavelength-pdf ")
+
+
+def test_shipped_data_is_found():
+    assert data.demo_scene().is_file() and data.demo_spectrum().is_file()
+    with pytest.raises(KeyError):
+        data.data_dir("lspdd")
+
+
+def _exe(path: Path) -> Path:
+    path.write_text("#!/bin/sh\nexit 0\n")
+    path.chmod(0o755)
+    return path
+
+
+def test_renderer_lookup_order(tmp_path, monkeypatch):
+    """--pbrt, then $WAVELENGTH_PDF_PBRT, then the checkout's build/pbrt, then PATH."""
+    a, b, c = (_exe(tmp_path / n) for n in ("a", "b", "pbrt"))
+    (tmp_path / "bin").mkdir()
+    on_path = _exe(tmp_path / "bin" / "pbrt")
+    monkeypatch.setenv(render.PBRT_ENV, str(b))
+    assert render.find_pbrt(a) == a
+    assert render.find_pbrt() == b
+    monkeypatch.delenv(render.PBRT_ENV)
+    monkeypatch.setattr(render, "CHECKOUT_PBRT", c)
+    assert render.find_pbrt() == c
+    monkeypatch.setattr(render, "CHECKOUT_PBRT", tmp_path / "missing")
+    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
+    assert render.find_pbrt() == on_path
+
+
+def test_renderer_not_found_lists_where_it_looked(tmp_path, monkeypatch):
+    monkeypatch.setenv(render.PBRT_ENV, str(tmp_path / "nope"))
+    monkeypatch.setattr(render, "CHECKOUT_PBRT", tmp_path / "build" / "pbrt")
+    monkeypatch.setenv("PATH", str(tmp_path))
+    with pytest.raises(render.RendererNotFound) as e:
+        render.find_pbrt()
+    msg = str(e.value)
+    assert str(tmp_path / "nope") in msg and str(tmp_path / "build" / "pbrt") in msg
+    assert "PATH" in msg and "--pbrt" in msg
+    with pytest.raises(render.RendererNotFound, match="not an executable"):
+        render.find_pbrt(tmp_path / "nope")
+
+
+def test_ipopt_without_cyipopt_says_how_to_install(monkeypatch):
+    import importlib.util
+
+    from wavelength_pdf import optimize
+    from wavelength_pdf.spectra import load_spectrum
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "cyipopt" else real(name, *a))
+    with pytest.raises(ValueError, match=r"wavelength-pdf\[ipopt\]"):
+        optimize.optimize_spectrum(load_spectrum("cie:D65"), solver="ipopt")
