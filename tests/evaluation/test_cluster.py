@@ -50,11 +50,13 @@ def _workers(address: str) -> int:
         return len(c.scheduler_info(n_workers=-1)["workers"])
 
 
-@pytest.fixture
-def dask_cluster(tmp_path):
+@pytest.fixture(scope="module")
+def dask_cluster(tmp_path_factory):
     """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1, each in its own process
-    group (so that killing one takes its renders with it); all torn down in the end."""
+    group (so that killing one takes its renders with it); all torn down in the end. Shared by
+    the module's tests (starting workers is the slow part); the test that kills one runs last."""
     assert DASK.is_file(), f"{DASK} is missing: pip install 'dask[distributed]'"
+    tmp_path = tmp_path_factory.mktemp("dask")
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     logs = tmp_path / "dask-logs"
@@ -169,34 +171,6 @@ def test_grid_on_a_scheduler_and_two_workers_equals_a_serial_run(tmp_path, dask_
     assert "estimated" not in capsys.readouterr().err
 
 
-def test_killing_a_worker_mid_grid_loses_no_finished_render(tmp_path, dask_cluster, cornell, spd, pbrt) -> None:
-    address, workers = dask_cluster
-    out = tmp_path / "grid"
-    _with_table(out)
-    renders = out / "cornell-box" / "tri-band-fluorescent" / "renders"
-    outcome = {}
-    args = _grid_args(out, cornell, spd, "--scheduler", address, "--pbrt", str(pbrt), "--seeds", "4",
-                      "--spp", "16", "64", "256")
-    grid = threading.Thread(target=lambda: outcome.setdefault("rc", main(args)))
-    grid.start()
-    try:
-        deadline = time.monotonic() + 300
-        while len(list(renders.glob("*.json"))) < 4 and grid.is_alive() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        finished = {m.name: m.stat().st_mtime_ns for m in renders.glob("*.json")}
-        assert grid.is_alive(), "the grid finished before a worker could be killed"
-        os.killpg(workers[0].pid, signal.SIGKILL)  # the worker, its nanny and its renders
-        workers[0].wait()
-    finally:
-        grid.join(timeout=600)
-    assert not grid.is_alive() and outcome.get("rc") == 0
-    assert len(finished) >= 4
-    after = {m.name: m.stat().st_mtime_ns for m in renders.glob("*.json")}
-    assert {k: after.get(k) for k in finished} == finished  # every finished render kept, none redone
-    rows = _rows(out / "results.csv")
-    assert len(rows) == 9 and all(float(r["mean"]) > 0 for r in rows)
-
-
 def test_render_threads_share_a_host_s_cores() -> None:
     assert cluster.render_threads(8, 8) == 1
     assert cluster.render_threads(8, 2) == 4
@@ -219,3 +193,31 @@ def test_a_failed_render_leaves_no_file(tmp_path, pbrt) -> None:
     with pytest.raises(rendering.RenderError, match=r"bad\.pbrt:2"):
         rendering.render(bad, tmp_path / "b.exr", uniform, 4, pbrt=pbrt)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.pbrt"]
+
+
+def test_killing_a_worker_mid_grid_loses_no_finished_render(tmp_path, dask_cluster, cornell, spd, pbrt) -> None:
+    address, workers = dask_cluster
+    out = tmp_path / "grid"
+    _with_table(out)
+    renders = out / "cornell-box" / "tri-band-fluorescent" / "renders"
+    outcome = {}
+    args = _grid_args(out, cornell, spd, "--scheduler", address, "--pbrt", str(pbrt), "--seeds", "3")
+    grid = threading.Thread(target=lambda: outcome.setdefault("rc", main(args)))
+    grid.start()
+    try:
+        deadline = time.monotonic() + 300
+        while len(list(renders.glob("*.json"))) < 3 and grid.is_alive() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        finished = {m.name: m.stat().st_mtime_ns for m in renders.glob("*.json")}
+        assert grid.is_alive(), "the grid finished before a worker could be killed"
+        os.killpg(workers[0].pid, signal.SIGKILL)  # the worker, its nanny and its renders
+        workers[0].wait()
+    finally:
+        grid.join(timeout=600)
+    assert not grid.is_alive() and outcome.get("rc") == 0
+    assert len(finished) >= 3
+    after = {m.name: m.stat().st_mtime_ns for m in renders.glob("*.json")}
+    assert {k: after.get(k) for k in finished} == finished  # every finished render kept, none redone
+    assert len(after) == 4 + 3 * 2 * 3 + 1  # every render and the merged truth
+    rows = _rows(out / "results.csv")
+    assert len(rows) == 6 and all(float(r["mean"]) > 0 and r["seeds"] == "3" for r in rows)

@@ -175,11 +175,12 @@ def _hours(seconds: float) -> str:
     return f"{seconds / 3600:.2f} h" if seconds >= 360 else f"{seconds / 60:.1f} min"
 
 
-def run(client, plans: Sequence[Plan], spectra: Sequence[Spectrum], tables: Sequence[Path | None],
-        nthreads: int | None = None, label: str = "grid", say=None):
+def run(client, plans: Sequence[Plan], optimize: dict[Path, Spectrum], nthreads: int | None = None,
+        label: str = "grid", say=None):
     """Run every plan's renders on ``client``'s cluster.
 
-    ``tables[i]`` None: plan i's table is optimized by a task first. Returns, per plan, the
+    ``optimize``: the tables to optimize first (a task each; the renders with a table wait for
+    its task), by path, with their spectra. Returns, per plan, the
     truth's :class:`~.render.Render` and the images by (method, spp, seed). Before submitting,
     prints the estimated CPU time of the renders still to do (from :func:`probe`); a progress
     bar follows every render."""
@@ -196,18 +197,17 @@ def run(client, plans: Sequence[Plan], spectra: Sequence[Spectrum], tables: Sequ
         cpu = estimate(remaining, plans, probe(client, plans, nthreads, slots))
         threads = sum(s * (nthreads or render_threads(host_cores.get(h, 1), s)) for h, s in slots.items())
         wall = f", about {_hours(cpu / threads)} wall with {threads} render threads at once"
-        optimize = sum(1 for p, t in zip(plans, tables) if t is None and not p.table.is_file())
+        missing = sum(1 for t in optimize if not Path(t).is_file())
         say(f"{label}: {len(remaining)} of {total} renders to do ({total - len(remaining)} cached); "
             f"estimated CPU time {_hours(cpu)}{wall} on {sum(slots.values())} worker slots"
-            + (f"; {optimize} table(s) to optimize first, not in the estimate" if optimize else ""))
+            + (f"; {missing} table(s) to optimize first, not in the estimate" if missing else ""))
+    lo_hi = {p.table: (p.config.lo, p.config.hi) for p in plans}
+    made = {Path(t): client.submit(table_task, sp, Path(t), *lo_hi[Path(t)], pure=False) for t, sp in optimize.items()}
     watched, names, truths, images = [], {}, [], []
-    for p, spectrum, table in zip(plans, spectra, tables):
-        deps = [client.submit(table_task, spectrum, p.table, p.config.lo, p.config.hi, pure=False)] \
-            if table is None else []
-
+    for p in plans:
         def submit(job: RenderJob, what: str):
-            f = client.submit(render_task, job, nthreads, slots,
-                              *(deps if job.sampler.name == "table" else []), pure=False)
+            deps = [made[p.table]] if job.sampler.name == "table" and p.table in made else []
+            f = client.submit(render_task, job, nthreads, slots, *deps, pure=False)
             watched.append(f)
             names[f.key] = f"{p.name}/{p.illuminant}: {what}"
             return f

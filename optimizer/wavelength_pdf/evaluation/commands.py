@@ -198,9 +198,10 @@ def job_outputs(ev, spectrum, outdir: Path) -> None:
     title = f"{ev.rows[0].scene} under {spectrum.name}"
     report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
     report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
-    t = read_table(ev.table)
-    plots.colour_bar_png(outdir / "colour-bar.png", spectrum, t)
-    plots.densities_png(outdir / "densities.png", spectrum, t)
+    if Path(ev.table).is_file():  # a grid without table renders optimizes no table
+        t = read_table(ev.table)
+        plots.colour_bar_png(outdir / "colour-bar.png", spectrum, t)
+        plots.densities_png(outdir / "densities.png", spectrum, t)
     (outdir / "results.md").write_text(report.markdown_table(ev.rows))
 
 
@@ -248,14 +249,26 @@ def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: 
             raise FileNotFoundError(2, "no such scene file", str(scene))
     # Everything that can be wrong with the inputs is found here, before any render.
     spectra = [load_spectrum(spec, lo=config.lo, hi=config.hi) for _, spec in jobs]
-    given = [(tables or {}).get(i) for i in range(len(jobs))]
-    for t in given:
-        if t is not None:
-            read_table(t)
+    # One table per spectrum: the first job's folder holds it, later jobs lit by the same
+    # spectrum render with that one.
+    needs_table = "table" in config.methods or config.truth_method == "table"
+    chosen: list[Path] = []
+    optimize: dict[Path, object] = {}
+    first: dict[str, Path] = {}
+    for i, ((scene, spec), sp) in enumerate(zip(jobs, spectra)):
+        if (tables or {}).get(i) is not None:
+            read_table(tables[i])
+            chosen.append(Path(tables[i]))
+            continue
+        if spec not in first:
+            first[spec] = _job_dir(outdir, Path(scene), spec) / "table.csv"
+            if needs_table:
+                optimize[first[spec]] = sp
+        chosen.append(first[spec])
     plans = [plan(Path(scene), sp, _job_dir(outdir, Path(scene), spec), config, table=t)
-             for (scene, spec), sp, t in zip(jobs, spectra, given)]
+             for (scene, spec), sp, t in zip(jobs, spectra, chosen)]
     with cluster.connect(workers, scheduler) as client:
-        results = cluster.run(client, plans, spectra, given, config.nthreads, "grid")
+        results = cluster.run(client, plans, optimize, config.nthreads, "grid")
     done = []
     for p, sp, (truth, images) in zip(plans, spectra, results):
         ev = finish(p, truth, images)

@@ -194,8 +194,8 @@ def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row
              markdown_table(rows, published=published), "", f"![summary]({rel(path.parent / 'summary.png')})", ""]
     for folder, job in jobs:
         head = f"{job[0].scene}: {job[0].illuminant}" if job else folder.name
-        lines += [f"## {head}", "",
-                  f"![colour bar]({rel(folder / 'colour-bar.png')})", "",
+        bar = [f"![colour bar]({rel(folder / 'colour-bar.png')})", ""] if (folder / "colour-bar.png").is_file() else []
+        lines += [f"## {head}", "", *bar,
                   f"![error against spp and time]({rel(folder / 'error-vs-spp-and-time.png')})", "",
                   f"![error maps]({rel(folder / 'error-maps.png')})", ""]
     path.write_text("\n".join(lines))
