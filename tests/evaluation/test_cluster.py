@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from wavelength_pdf.cli import main
-from wavelength_pdf.evaluation import cluster, render as rendering
+from wavelength_pdf.evaluation import cluster, commands, render as rendering
 from wavelength_pdf.evaluation.protocol import Config, evaluate, merge_chunks, merge_truth, plan
 from wavelength_pdf.exr import read_rgb
 from wavelength_pdf.spectra import load_spectrum
@@ -98,6 +98,16 @@ def dask_cluster(tmp_path_factory):
                 p.wait()
 
 
+@pytest.fixture
+def no_colour_bars(monkeypatch):
+    """The jobs' colour bar and densities plots are not what these tests check, and computing
+    them (JAX compilation) is most of a tiny grid's time: leave them out."""
+    drawn = []
+    monkeypatch.setattr(commands.plots, "colour_bar_png", lambda path, *a: drawn.append(path))
+    monkeypatch.setattr(commands.plots, "densities_png", lambda path, *a: drawn.append(path))
+    return drawn
+
+
 def _rows(path: Path) -> list[dict]:
     """results.csv without the render times (wall clock differs between runs)."""
     with open(path, newline="") as f:
@@ -152,7 +162,7 @@ def test_truth_from_four_chunks_is_the_weighted_mean_of_their_images(tmp_path, c
 
 
 def test_grid_on_a_scheduler_and_two_workers_equals_a_serial_run(tmp_path, dask_cluster, cornell, spd,
-                                                                  pbrt, capsys) -> None:
+                                                                  pbrt, capsys, no_colour_bars) -> None:
     address, _ = dask_cluster
     out = tmp_path / "dist"
     _with_table(out)
@@ -195,7 +205,8 @@ def test_a_failed_render_leaves_no_file(tmp_path, pbrt) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.pbrt"]
 
 
-def test_killing_a_worker_mid_grid_loses_no_finished_render(tmp_path, dask_cluster, cornell, spd, pbrt) -> None:
+def test_killing_a_worker_mid_grid_loses_no_finished_render(tmp_path, dask_cluster, cornell, spd, pbrt,
+                                                            no_colour_bars) -> None:
     address, workers = dask_cluster
     out = tmp_path / "grid"
     _with_table(out)

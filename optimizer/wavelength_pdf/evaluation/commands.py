@@ -328,8 +328,8 @@ def cmd_published(args) -> int:
     config = _config(args)
     jobs = published_jobs(args.shared, args.only)
     marks = published_ratios(args.only)
-    rows = run_grid(jobs, args.outdir, config, "published comparison at reduced resolution",
-                    workers=args.workers, scheduler=args.scheduler, published=marks)
+    run_grid(jobs, args.outdir, config, "published comparison at reduced resolution",
+             workers=args.workers, scheduler=args.scheduler, published=marks)
     print((args.outdir / "results.md").read_text())
     print(f"report: {args.outdir / 'report.md'}")
     if args.docs is not None:
