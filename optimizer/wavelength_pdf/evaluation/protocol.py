@@ -1,4 +1,4 @@
-"""The evaluation protocol (SPEC 6) for one scene and one lamp spectrum.
+"""The evaluation protocol (design §6) for one scene and one lamp spectrum.
 
 1. A copy of the scene lit by the spectrum (cut to the table's range), at the evaluation's
    resolution (:mod:`.scene_edit`).

@@ -34,7 +34,7 @@ class Sampler:
 
 
 def samplers(table: Path | None, lo: float, hi: float) -> dict[str, Sampler]:
-    """The samplers of SPEC 6: the baseline, pbrt-v4's default and the table."""
+    """The samplers of design §6: the baseline, pbrt-v4's default and the table."""
     out = {
         "uniform": Sampler("uniform", f"stratified uniform {lo:g}-{hi:g} nm",
                            ("--wavelength-sampling", "uniform", "--wavelength-range", f"{lo:g}", f"{hi:g}")),

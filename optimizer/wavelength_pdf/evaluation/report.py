@@ -189,7 +189,7 @@ def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row
              f"- Ground truth: {config.truth_method} sampling, {config.truth_spp} spp, its own seed"
              + (f" ({config.truth_chunks} independent renders of {config.truth_spp // config.truth_chunks} spp, "
                 "merged weighted by spp)." if config.truth_chunks > 1 else "."),
-             "- Error: per-pixel CIEDE2000 against the ground truth (SPEC 6): mean (median / 95th "
+             "- Error: per-pixel CIEDE2000 against the ground truth (design §6): mean (median / 95th "
              "percentile). Seconds: wall clock of the renderer process, start-up included.", "",
              markdown_table(rows, published=published), "", f"![summary]({rel(path.parent / 'summary.png')})", ""]
     for folder, job in jobs:
