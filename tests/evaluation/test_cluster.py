@@ -196,6 +196,16 @@ def test_the_estimate_fits_start_up_and_time_per_sample() -> None:
     assert noisy.per_spp == 0 and noisy.start == pytest.approx(2.0)
 
 
+def test_sweep_removes_only_idle_temporary_files(tmp_path) -> None:
+    old, new, image = (tmp_path / n for n in (".a.1234.tmp.exr", ".b.5678.tmp.exr", "a.exr"))
+    for f in (old, new, image):
+        f.write_text("x")
+    os.utime(old, (time.time() - 100, time.time() - 100))
+    os.utime(image, (time.time() - 100, time.time() - 100))
+    assert cluster.sweep(tmp_path, time.time() - 10) == [old]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [new.name, image.name]
+
+
 def test_a_failed_render_leaves_no_file(tmp_path, pbrt) -> None:
     bad = tmp_path / "bad.pbrt"
     bad.write_text('WorldBegin\nShape "sphere" "float radius" [ oops ]\n')

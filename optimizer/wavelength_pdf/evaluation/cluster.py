@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import time
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -220,4 +221,19 @@ def run(client, plans: Sequence[Plan], optimize: dict[Path, Spectrum], nthreads:
             f.result()  # a failed render raises its RenderError here
             bar.set_postfix_str(names.get(f.key, ""), refresh=False)
             bar.update(1)
-    return [(t.result(), {key: f.result() for key, f in im.items()}) for t, im in zip(truths, images)]
+    out = [(t.result(), {key: f.result() for key, f in im.items()}) for t, im in zip(truths, images)]
+    for p in plans:  # every task is done: a temporary file idle for a while is an orphan
+        sweep(p.outdir / "renders", time.time() - 10.0)
+    return out
+
+
+def sweep(folder: Path, before: float) -> list[Path]:
+    """Remove the temporary files that renders killed with their worker left in ``folder``
+    (those last written before ``before``, so that one still being written stays)."""
+    gone = []
+    for f in Path(folder).glob(".*.tmp.*"):
+        with contextlib.suppress(OSError):
+            if f.stat().st_mtime < before:
+                f.unlink()
+                gone.append(f)
+    return gone
