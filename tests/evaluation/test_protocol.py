@@ -72,21 +72,21 @@ def test_reruns_reuse_renders_and_a_changed_table_renders_again(tmp_path, cornel
     assert json.loads((tmp_path / "ev" / "renders" / "table-4-seed1.json").read_text())["seconds"] > 0
 
 
-def test_grid_report_links_existing_files(tmp_path, cornell, repo, pbrt, monkeypatch) -> None:
+def test_grid_report_links_existing_files(tmp_path, cornell, repo, pbrt) -> None:
     # The tri-band table is given, so that the grid does not spend time optimizing.
-    real = commands.run_one
-    monkeypatch.setattr(commands, "run_one",
-                        lambda scene, spec, out, config, table, bar=None: real(scene, spec, out, config, TABLE, bar))
-    config = _config(pbrt, spp=(4,), truth_spp=64, seeds=1)
+    config = _config(pbrt, spp=(4,), truth_spp=64, seeds=1, nthreads=1)
     spd = str(repo / "spectra" / "tri-band-fluorescent.spd")
-    rows = commands.run_grid([(cornell, spd)], tmp_path, config, "test grid")
+    rows = commands.run_grid([(cornell, spd)], tmp_path, config, "test grid", workers=1, tables={0: TABLE},
+                             published=["9.9"])
     assert len(rows) == 3
     text = (tmp_path / "report.md").read_text()
     links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
     assert len(links) == 4  # summary, and the job's colour bar, error plot and error maps
     for link in links:
         assert (tmp_path / link).is_file(), link
-    assert "| cornell-box |" in text and report.markdown_table(rows) in text
+    assert "| cornell-box |" in text
+    assert report.markdown_table(rows, published={("cornell-box", "tri-band-fluorescent"): "9.9"}) in text
+    assert "published ratio" in text and text.count(" 9.9 |") == 1  # on the job's highest-spp line
 
 
 def test_command_line_errors_exit_2_and_name_the_problem(tmp_path, capsys) -> None:
@@ -97,14 +97,22 @@ def test_command_line_errors_exit_2_and_name_the_problem(tmp_path, capsys) -> No
     assert main(["published", "--shared", str(tmp_path / "nowhere"), "-o", str(tmp_path)]) == 2
     assert "nowhere" in capsys.readouterr().err
     assert main(["evaluate", "x.pbrt", "cie:D65", "-o", str(tmp_path), "--seeds", "0"]) == 2
+    # truth chunks of unequal spp, or no worker: an error before anything runs
+    assert main(["grid", "--pairs", "x.pbrt=cie:D65", "-o", str(tmp_path), "--truth-spp", "100",
+                 "--truth-chunks", "3"]) == 2
+    assert "--truth-chunks" in capsys.readouterr().err
+    assert main(["grid", "--pairs", "x.pbrt=cie:D65", "-o", str(tmp_path), "--workers", "0"]) == 2
+    assert "--workers" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["evaluate", "x.pbrt", "cie:D65", "-o", str(tmp_path), "--resolution-scale", "-1"])
 
 
 def test_published_jobs_exist_in_shared(shared) -> None:
     jobs = commands.published_jobs(shared)
-    assert len(jobs) == len(commands.PUBLISHED)
-    assert {p.parent.name for p, _ in jobs} == {"cornell-box", "veach-mis"}
+    assert len(jobs) == len(commands.PUBLISHED) == len(commands.published_ratios()) == 14
+    assert {p.parent.name for p, _ in jobs} == {"cornell-box", "teapot", "veach-bidir", "veach-mis", "staircase",
+                                               "glass-of-water"}
+    assert commands.published_ratios(["veach-mis/2641", "glass-of-water/cie:D65"]) == ["2.4", "0.93"]
     assert commands.published_jobs(shared, ["veach-mis/2641"])[0][1].endswith("2641.csv")
     with pytest.raises(ValueError, match="no job"):
         commands.published_jobs(shared, ["teapot/1"])

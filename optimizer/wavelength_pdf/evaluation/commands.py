@@ -12,11 +12,13 @@ import shutil
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 from wavelength_pdf import plots
 from wavelength_pdf.evaluation import report
-from wavelength_pdf.evaluation.protocol import DEFAULT_METHODS, DEFAULT_SPP, Config, evaluate, write_rows
 from wavelength_pdf import data, progress
+from wavelength_pdf.evaluation.protocol import (DEFAULT_METHODS, DEFAULT_SPP, Config, check_config, evaluate,
+                                                finish, plan, write_rows)
 from wavelength_pdf.evaluation.render import PBRT_ENV, REPO, find_pbrt
 from wavelength_pdf.produce import safe_name
 from wavelength_pdf.spectra import load_spectrum
@@ -72,6 +74,9 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
     p.set_defaults(default_resolution=_resolution(resolution) if resolution else scale)
     p.add_argument("--range", type=float, nargs=2, default=(380.0, 780.0), metavar=("LO", "HI"),
                    help="wavelength range of the table and of every sampler, nm (default 380 780)")
+    p.add_argument("--truth-chunks", type=int, default=1, metavar="K",
+                   help="render the ground truth as K independent images (seeds of their own, TRUTH_SPP/K spp "
+                        "each) that run in parallel and are merged weighted by spp (default 1)")
     p.add_argument("--seed", type=int, default=1, help="renderer seed of the compared images")
     p.add_argument("--nthreads", type=int, default=None, help="renderer threads (default: all cores)")
     p.add_argument("--pbrt", type=Path, default=None,
@@ -83,6 +88,17 @@ def _renderer(p: argparse.ArgumentParser) -> None:
     p.add_argument("--renderer", choices=("pbrt", "mitsuba"), default="pbrt",
                    help="pbrt (build/pbrt, a .pbrt scene) or mitsuba (Mitsuba 3, llvm_ad_spectral, a .xml "
                         "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default)")
+
+
+def _cluster(p: argparse.ArgumentParser) -> None:
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="run the renders on a local Dask cluster of N single-threaded worker processes, "
+                            "each render using cores/N threads (default: one worker per core)")
+    where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                       help="run the renders on the existing Dask cluster at this scheduler (workers started "
+                            "with `dask worker`; they must see the output folder, the scenes and the renderer "
+                            "at the same paths): docs/evaluation.md")
 
 
 def add_subcommands(sub) -> None:
@@ -110,15 +126,18 @@ def add_subcommands(sub) -> None:
                    help="scene and spectrum pairs, instead of (or besides) the full --scenes x --spectra grid")
     g.add_argument("-o", "--outdir", type=Path, required=True, help="output folder")
     _common(g)
+    _cluster(g)
     g.set_defaults(func=cmd_grid)
 
-    pub = sub.add_parser("published", help="the published comparison (Cornell box, Veach MIS; LSPDD lamps), "
+    pub = sub.add_parser("published", help="the published comparison (six scenes; LSPDD lamps, CIE D65 and A), "
                                            "at reduced resolution, from ../shared",
-                         description="Runs the grid of the published evaluation: the Cornell box under the "
-                                     "compact fluorescent (LSPDD 2482), the sun (2629) and the scotopic curve "
-                                     "(2639), and Veach MIS under CIE A (2659), the Philips High Bay metal "
-                                     "halide (2641) and the sun, plus the Cornell box under CIE D65 as a "
-                                     "further smooth spectrum. Scenes and spectra come from --shared.")
+                         description="Runs the grid of the published evaluation, every row of its table: the "
+                                     "Cornell box under the compact fluorescent (LSPDD 2482), the sun (2629) and "
+                                     "the scotopic curve (2639); the teapot (2482, 2629); Veach bidir (2482); "
+                                     "Veach MIS under CIE A (2659), the Philips High Bay metal halide (2641) and "
+                                     "the sun; the staircase (D65, 2641); the glass of water (D65, A, 2482). The "
+                                     "report shows the published ratio beside the measured one. Scenes and "
+                                     "spectra come from --shared.")
     pub.add_argument("--shared", type=Path, default=REPO.parent / "shared",
                      help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the repository)")
     pub.add_argument("-o", "--outdir", type=Path, default=OUT / "published",
@@ -130,6 +149,7 @@ def add_subcommands(sub) -> None:
                           "e.g. docs/evaluation")
     _common(pub, spp=(16, 64, 256, 512), truth_spp=16384, resolution=None, scale=0.125,
             seeds=3)
+    _cluster(pub)
     pub.set_defaults(func=cmd_published)
 
     d = sub.add_parser("demo", help="the main job: the project's Cornell box under its tri-band lamp "
@@ -145,29 +165,54 @@ def add_subcommands(sub) -> None:
     d.set_defaults(func=cmd_demo)
 
 
-#: The published comparison: (scene folder, LSPDD number or built-in name, label).
+#: The published comparison (Dobos 2025, its table of results): (scene folder, LSPDD number or
+#: built-in name, label, the published baseline/table ratio of mean CIEDE2000; "" where the
+#: publication gives none for the row).
 PUBLISHED = (
-    ("cornell-box", "2482", "compact fluorescent"),
-    ("cornell-box", "2629", "sun"),
-    ("cornell-box", "2639", "scotopic"),
-    ("veach-mis", "2659", "CIE A"),
-    ("veach-mis", "2641", "Philips High Bay"),
-    ("veach-mis", "2629", "sun"),
-    ("cornell-box", "cie:D65", "CIE D65 (not in the published set)"),
+    ("cornell-box", "2482", "compact fluorescent", "2.6"),
+    ("cornell-box", "2629", "sun", "1.0-1.2"),
+    ("cornell-box", "2639", "scotopic", "1.0-1.2"),
+    ("teapot", "2482", "compact fluorescent", "2.9"),
+    ("teapot", "2629", "sun", "1.0-1.2"),
+    ("veach-bidir", "2482", "compact fluorescent", "3.5"),
+    ("veach-mis", "2659", "CIE A", "1.0-1.2"),
+    ("veach-mis", "2641", "Philips High Bay", "2.4"),
+    ("veach-mis", "2629", "sun", "1.0-1.2"),
+    ("staircase", "cie:D65", "CIE D65", "1.0-1.2"),
+    ("staircase", "2641", "Philips High Bay", "2.0"),
+    ("glass-of-water", "cie:D65", "CIE D65", "0.93"),
+    ("glass-of-water", "cie:A", "CIE A", "1.0-1.2"),
+    ("glass-of-water", "2482", "compact fluorescent", ""),
 )
 
 
 def _config(args) -> Config:
     resolution = args.resolution or args.resolution_scale or args.default_resolution
-    if args.seeds < 1:
-        raise ValueError(f"--seeds must be at least 1, got {args.seeds}")
-    return Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp, truth_method=args.truth_method,
-                  resolution=resolution, seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
-                  lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt))
+    config = Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp,
+                    truth_method=args.truth_method, truth_chunks=args.truth_chunks, resolution=resolution,
+                    seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
+                    lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt))
+    check_config(config)
+    if getattr(args, "workers", None) is not None and args.workers < 1:
+        raise ValueError(f"--workers must be at least 1, got {args.workers}")
+    return config
 
 
 def _images(config: Config) -> int:
     return len(config.methods) * len(config.spp) * config.seeds
+
+
+def job_outputs(ev, spectrum, outdir: Path) -> None:
+    """A finished evaluation's plots: error against spp and time, error maps, colour bar,
+    densities, and its results.md."""
+    title = f"{ev.rows[0].scene} under {spectrum.name}"
+    report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
+    report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
+    if Path(ev.table).is_file():  # a grid without table renders optimizes no table
+        t = read_table(ev.table)
+        plots.colour_bar_png(outdir / "colour-bar.png", spectrum, t)
+        plots.densities_png(outdir / "densities.png", spectrum, t)
+    (outdir / "results.md").write_text(report.markdown_table(ev.rows))
 
 
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
@@ -201,14 +246,8 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
     else:
         ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say,
                       optimizer_progress=optimizing)
-    title = f"{ev.rows[0].scene} under {spectrum.name}"
-    report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
-    report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
-    say("colour bar")
-    t = read_table(ev.table)
-    plots.colour_bar_png(outdir / "colour-bar.png", spectrum, t)
-    plots.densities_png(outdir / "densities.png", spectrum, t)
-    (outdir / "results.md").write_text(report.markdown_table(ev.rows))
+    say("plots")
+    job_outputs(ev, spectrum, outdir)
     return ev
 
 
@@ -225,21 +264,51 @@ def _job_dir(outdir: Path, scene: Path, spectrum: str) -> Path:
     return outdir / (scene.parent.name or scene.stem) / safe_name(Path(spectrum.replace(":", "-")).stem)
 
 
-def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: str) -> list:
-    """Evaluate every (scene, spectrum) job into its own folder; write the combined report."""
+def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: str, *,
+             workers: int | None = None, scheduler: str | None = None,
+             tables: dict[int, Path] | None = None, published: Sequence[str] | None = None) -> list:
+    """Evaluate every (scene, spectrum) job into its own folder, the renders on a Dask cluster
+    (:mod:`.cluster`: a local one of ``workers`` processes, or the one at ``scheduler``); write
+    the combined report. ``tables[i]``: a ready table for job i instead of optimizing one;
+    ``published[i]``: job i's published ratio, shown beside the measured one."""
+    from wavelength_pdf.evaluation import cluster
+
     for scene, _ in jobs:
         if not Path(scene).is_file():
             raise FileNotFoundError(2, "no such scene file", str(scene))
+    # Everything that can be wrong with the inputs is found here, before any render.
+    spectra = [load_spectrum(spec, lo=config.lo, hi=config.hi) for _, spec in jobs]
+    # One table per spectrum: the first job's folder holds it, later jobs lit by the same
+    # spectrum render with that one.
+    needs_table = "table" in config.methods or config.truth_method == "table"
+    chosen: list[Path] = []
+    optimize: dict[Path, object] = {}
+    first: dict[str, Path] = {}
+    for i, ((scene, spec), sp) in enumerate(zip(jobs, spectra)):
+        if (tables or {}).get(i) is not None:
+            read_table(tables[i])
+            chosen.append(Path(tables[i]))
+            continue
+        if spec not in first:
+            first[spec] = _job_dir(outdir, Path(scene), spec) / "table.csv"
+            if needs_table:
+                optimize[first[spec]] = sp
+        chosen.append(first[spec])
+    plans = [plan(Path(scene), sp, _job_dir(outdir, Path(scene), spec), config, table=t)
+             for (scene, spec), sp, t in zip(jobs, spectra, chosen)]
+    with cluster.connect(workers, scheduler) as client:
+        results = cluster.run(client, plans, optimize, config.nthreads, "grid")
     done = []
-    with progress.bar(total=len(jobs) * _images(config), desc="grid", file=sys.stderr, unit="image") as bar:
-        for scene, spec in jobs:
-            folder = _job_dir(outdir, Path(scene), spec)
-            done.append((folder, run_one(Path(scene), spec, folder, config, None, bar).rows))
+    for p, sp, (truth, images) in zip(plans, spectra, results):
+        ev = finish(p, truth, images)
+        job_outputs(ev, sp, p.outdir)
+        done.append((p.outdir, ev.rows))
     rows = [r for _, job in done for r in job]
     write_rows(outdir / "results.csv", rows)
-    (outdir / "results.md").write_text(report.markdown_table(rows))
+    marks = {(d[1][0].scene, d[1][0].illuminant): m for d, m in zip(done, published)} if published else None
+    (outdir / "results.md").write_text(report.markdown_table(rows, published=marks))
     report.plot_summary(rows, outdir / "summary.png", title)
-    report.write_report(outdir / "report.md", title, done, config)
+    report.write_report(outdir / "report.md", title, done, config, published=marks)
     return rows
 
 
@@ -255,7 +324,7 @@ def cmd_grid(args) -> int:
     jobs = list(itertools.product(args.scenes, args.spectra)) + [_pair(t) for t in args.pairs]
     if not jobs:
         raise ValueError("grid: give --scenes and --spectra, or --pairs")
-    rows = run_grid(jobs, args.outdir, config, "evaluation grid")
+    rows = run_grid(jobs, args.outdir, config, "evaluation grid", workers=args.workers, scheduler=args.scheduler)
     print(report.markdown_table(rows))
     print(f"report: {args.outdir / 'report.md'}")
     return 0
@@ -264,7 +333,7 @@ def cmd_grid(args) -> int:
 def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Path, str]]:
     """The (scene, spectrum) pairs of the published comparison, as paths under ``shared``."""
     jobs = []
-    for scene, spec, _ in PUBLISHED:
+    for scene, spec, *_ in PUBLISHED:
         if only and f"{scene}/{spec}" not in only:
             continue
         path = shared / "scenes" / scene / "scene-v4.pbrt"
@@ -274,16 +343,23 @@ def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Pa
                 raise FileNotFoundError(2, "missing (the published comparison needs ../shared)", str(f))
         jobs.append((path, spectrum))
     if not jobs:
-        known = ", ".join(f"{s}/{p}" for s, p, _ in PUBLISHED)
+        known = ", ".join(f"{s}/{p}" for s, p, *_ in PUBLISHED)
         raise ValueError(f"--only matches no job; the jobs are {known}")
     return jobs
+
+
+def published_ratios(only: list[str] | None = None) -> list[str]:
+    """The published baseline/table ratios of :func:`published_jobs`' jobs, in its order."""
+    return [ratio for scene, spec, _, ratio in PUBLISHED if not only or f"{scene}/{spec}" in only]
 
 
 def cmd_published(args) -> int:
     config = _config(args)
     jobs = published_jobs(args.shared, args.only)
-    rows = run_grid(jobs, args.outdir, config, "published comparison at reduced resolution")
-    print(report.markdown_table(rows))
+    marks = published_ratios(args.only)
+    run_grid(jobs, args.outdir, config, "published comparison at reduced resolution",
+             workers=args.workers, scheduler=args.scheduler, published=marks)
+    print((args.outdir / "results.md").read_text())
     print(f"report: {args.outdir / 'report.md'}")
     if args.docs is not None:
         copied = copy_report(args.outdir, args.docs)

@@ -12,6 +12,7 @@ import re
 import shutil
 import subprocess
 import time
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -138,6 +139,42 @@ def _run(cmd: list[str], on_percent: Callable[[int], None] | None) -> tuple[int,
 _PERCENT = re.compile(rb"\]\s+(\d+)%")
 
 
+def cached(out: Path, key: str) -> Render | None:
+    """The finished render at ``out`` if its JSON record carries ``key``, else None."""
+    out = Path(out)
+    meta = out.with_suffix(".json")
+    if out.is_file() and meta.is_file():
+        try:
+            m = json.loads(meta.read_text())
+        except ValueError:  # a record cut short (an old crash): render again
+            return None
+        if m.get("key") == key:
+            return Render(out, float(m["seconds"]))
+    return None
+
+
+def render_key(scene: Path, sampler: Sampler, spp: int, seed: int, pbrt: Path | None = None) -> str:
+    """The cache key of a render: the scene's, the binary's and the table's bytes, sampler, spp, seed."""
+    pbrt = find_pbrt(pbrt)
+    inputs = [scene, pbrt] + ([Path(sampler.args[-1])] if sampler.name == "table" else [])
+    return file_digest(*inputs, extra=json.dumps([sampler.args, spp, seed]))
+
+
+def temporary(path: Path) -> Path:
+    """A unique name beside ``path`` with its suffix (the renderer picks the format by it), for
+    writing a file and then renaming it into place: a reader, or another worker doing the same
+    render, never sees a partial file."""
+    path = Path(path)
+    return path.with_name(f".{path.stem}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}")
+
+
+def write_json(path: Path, record: dict) -> None:
+    """Write a JSON record atomically (temporary file, then rename)."""
+    tmp = temporary(path)
+    tmp.write_text(json.dumps(record, indent=1))
+    os.replace(tmp, path)
+
+
 def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
            nthreads: int | None = None, pbrt: Path | None = None, cache: bool = True,
            on_percent: Callable[[int], None] | None = None) -> Render:
@@ -145,28 +182,31 @@ def render(scene: Path, out: Path, sampler: Sampler, spp: int, *, seed: int = 0,
 
     A JSON file beside the image records the inputs' digest and the render time, so a rerun
     with the same scene, table, binary, sampler, spp and seed reuses it (resumable grids).
+    Image and record are written under temporary names and renamed into place, so concurrent
+    or repeated runs of the same render (a task retried after a worker died) are harmless.
     ``on_percent`` follows a long render's progress (0-100).
     """
     out = Path(out)
     pbrt = find_pbrt(pbrt)
-    meta = out.with_suffix(".json")
-    inputs = [scene, pbrt] + ([Path(sampler.args[-1])] if sampler.name == "table" else [])
-    key = file_digest(*inputs, extra=json.dumps([sampler.args, spp, seed]))
-    if cache and out.is_file() and meta.is_file():
-        m = json.loads(meta.read_text())
-        if m.get("key") == key:
-            return Render(out, float(m["seconds"]))
+    key = render_key(scene, sampler, spp, seed, pbrt)
+    if cache and (done := cached(out, key)) is not None:
+        return done
     out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = temporary(out)
     cmd = [str(pbrt), *([] if on_percent else ["--quiet"]), "--spp", str(spp), "--seed", str(seed),
-           *sampler.args, "--outfile", str(out)]
+           *sampler.args, "--outfile", str(tmp)]
     if nthreads:
         cmd += ["--nthreads", str(nthreads)]
     cmd.append(str(scene))
     start = time.perf_counter()
-    status, stderr = _run(cmd, on_percent)
-    seconds = time.perf_counter() - start
-    if status != 0 or not out.is_file():
-        raise RenderError(f"{' '.join(cmd)} failed (exit {status}):\n{stderr.strip()}")
-    meta.write_text(json.dumps({"key": key, "seconds": seconds, "command": cmd,
-                                "cpus": os.cpu_count()}, indent=1))
+    try:
+        status, stderr = _run(cmd, on_percent)
+        seconds = time.perf_counter() - start
+        if status != 0 or not tmp.is_file():
+            raise RenderError(f"{' '.join(cmd)} failed (exit {status}):\n{stderr.strip()}")
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+    write_json(out.with_suffix(".json"), {"key": key, "seconds": seconds, "command": cmd,
+                                          "nthreads": nthreads, "cpus": os.cpu_count()})
     return Render(out, seconds)

@@ -60,16 +60,24 @@ def _ratio_cell(base: Row, ours: Row) -> str:
     return f"{r:.2f} ± {err:.2f}" if math.isfinite(err) else f"{r:.2f}"
 
 
-def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "table") -> str:
+def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "table",
+                   published: dict[tuple[str, str], str] | None = None) -> str:
     """The results as a Markdown table: mean dE2000 (median, p95) and seconds per method.
 
-    With several seeds, the mean carries ± the standard deviation of the per-seed means."""
+    With several seeds, the mean carries ± the standard deviation of the per-seed means.
+    ``published`` maps (scene, illuminant) to the published ratio, shown in a last column on
+    each job's line at its highest spp (the published figures are at convergence)."""
     methods = list(dict.fromkeys(r.method for r in rows))
     head = ["scene", "illuminant", "spp"] + [f"{m} ΔE mean (median / p95)" for m in methods] + \
            [f"{m} s" for m in methods]
     ratio = baseline in methods and ours in methods
     if ratio:
         head.append(f"{baseline}/{ours} mean ΔE")
+    if published is not None:
+        head.append("published ratio")
+        top = {}
+        for r in rows:
+            top[(r.scene, r.illuminant)] = max(top.get((r.scene, r.illuminant), 0), r.spp)
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for (scene, illum, spp), by in sorted(_grouped(rows).items()):
         cells = [scene, illum, str(spp)]
@@ -77,6 +85,8 @@ def markdown_table(rows: Sequence[Row], baseline: str = "uniform", ours: str = "
         cells += [f"{by[m].seconds:.3g}" if m in by else "" for m in methods]
         if ratio:
             cells.append(_ratio_cell(by[baseline], by[ours]) if baseline in by and ours in by else "")
+        if published is not None:
+            cells.append((published.get((scene, illum)) or "–") if spp == top[(scene, illum)] else "")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -162,7 +172,8 @@ def plot_summary(rows: Sequence[Row], path: Path, title: str = "") -> None:
     plt.close(fig)
 
 
-def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row]]], config: Config) -> None:
+def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row]]], config: Config,
+                 published: dict[tuple[str, str], str] | None = None) -> None:
     """A Markdown report of a grid: settings, the results table, the summary plot, and per job
     its colour bar, error plots and error maps (links relative to the report)."""
     path = Path(path)
@@ -175,14 +186,16 @@ def write_report(path: Path, title: str, jobs: Sequence[tuple[Path, Sequence[Row
              f"- Images: {size}; wavelengths {config.lo:g}-{config.hi:g} nm; methods "
              f"{', '.join(config.methods)}; spp {', '.join(map(str, config.spp))}; "
              f"{config.seeds} seed(s) per image (± is the standard deviation of the per-seed means).",
-             f"- Ground truth: {config.truth_method} sampling, {config.truth_spp} spp, its own seed.",
-             "- Error: per-pixel CIEDE2000 against the ground truth (SPEC 6): mean (median / 95th "
+             f"- Ground truth: {config.truth_method} sampling, {config.truth_spp} spp, its own seed"
+             + (f" ({config.truth_chunks} independent renders of {config.truth_spp // config.truth_chunks} spp, "
+                "merged weighted by spp)." if config.truth_chunks > 1 else "."),
+             "- Error: per-pixel CIEDE2000 against the ground truth (design §6): mean (median / 95th "
              "percentile). Seconds: wall clock of the renderer process, start-up included.", "",
-             markdown_table(rows), "", f"![summary]({rel(path.parent / 'summary.png')})", ""]
+             markdown_table(rows, published=published), "", f"![summary]({rel(path.parent / 'summary.png')})", ""]
     for folder, job in jobs:
         head = f"{job[0].scene}: {job[0].illuminant}" if job else folder.name
-        lines += [f"## {head}", "",
-                  f"![colour bar]({rel(folder / 'colour-bar.png')})", "",
+        bar = [f"![colour bar]({rel(folder / 'colour-bar.png')})", ""] if (folder / "colour-bar.png").is_file() else []
+        lines += [f"## {head}", "", *bar,
                   f"![error against spp and time]({rel(folder / 'error-vs-spp-and-time.png')})", "",
                   f"![error maps]({rel(folder / 'error-maps.png')})", ""]
     path.write_text("\n".join(lines))
