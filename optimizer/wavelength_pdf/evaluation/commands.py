@@ -14,8 +14,6 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from wavelength_pdf import plots
-from wavelength_pdf.evaluation import report
 from wavelength_pdf.evaluation.protocol import DEFAULT_METHODS, DEFAULT_SPP, Config, evaluate, write_rows
 from wavelength_pdf.evaluation.render import DEFAULT_PBRT, REPO
 from wavelength_pdf.produce import safe_name
@@ -161,6 +159,8 @@ def _images(config: Config) -> int:
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
             bar: tqdm | None = None):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
+    from wavelength_pdf import plots  # matplotlib: imported when a plot is drawn
+    from wavelength_pdf.evaluation import report
     spectrum = load_spectrum(spectrum_spec, lo=config.lo, hi=config.hi)
 
     def say(msg: str) -> None:
@@ -182,6 +182,7 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
 
 
 def cmd_evaluate(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     with tqdm(total=_images(config), desc="evaluate", file=sys.stderr, unit="image") as bar:
         ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar)
@@ -196,6 +197,7 @@ def _job_dir(outdir: Path, scene: Path, spectrum: str) -> Path:
 
 def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: str) -> list:
     """Evaluate every (scene, spectrum) job into its own folder; write the combined report."""
+    from wavelength_pdf.evaluation import report
     for scene, _ in jobs:
         if not Path(scene).is_file():
             raise FileNotFoundError(2, "no such scene file", str(scene))
@@ -220,6 +222,7 @@ def _pair(text: str) -> tuple[Path, str]:
 
 
 def cmd_grid(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     jobs = list(itertools.product(args.scenes, args.spectra)) + [_pair(t) for t in args.pairs]
     if not jobs:
@@ -249,6 +252,7 @@ def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Pa
 
 
 def cmd_published(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     jobs = published_jobs(args.shared, args.only)
     rows = run_grid(jobs, args.outdir, config, "published comparison at reduced resolution")
@@ -265,6 +269,7 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
     keeping the folder layout so that the report's relative links still resolve. Nothing else
     goes: not the renders, not the tables, and not densities.png, which draws the lamp spectrum
     itself (licensed data such as the LSPDD spectra must not be redistributed)."""
+    from wavelength_pdf.evaluation import report
     names = ["report.md", "results.csv", *report.report_images(outdir / "report.md")]
     copied = []
     for name in sorted(names):
@@ -275,6 +280,7 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
 
 
 def cmd_demo(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     print(f"demo: {args.scene.relative_to(REPO) if args.scene.is_relative_to(REPO) else args.scene} "
           f"lit by {args.spectrum}; output in {args.outdir}", file=sys.stderr)
