@@ -1,64 +1,47 @@
 #!/usr/bin/env python3
-"""Benchmark the optimizer: J, health and time per spectrum, on one core.
+"""Benchmark the optimizer: J ratio, health and whole-process seconds per spectrum.
 
-For every spectrum (default: each LSPDD export in ../shared/spectra/lspdd if present, the
-CIE illuminants A, D65, FL1-FL12, HP1-HP5, and the cornell-box scene's lamp) this prints
+Every spectrum is optimized by its own ``wavelength-pdf optimize SPECTRUM -o TABLE``
+process, as a user runs it (start-up, imports, spectrum reading, compilation or the
+persistent compilation cache, the optimization, writing the table), pinned to one core
+with one XLA thread. For each it prints J of stratified uniform sampling, of the
+initialization and of the result (at two u-resolutions, design §4), the ratio
+J / J_uniform, the health figures and whether the table is accepted, the table's node
+count, and the process's wall and CPU seconds (``resource.getrusage`` of the child: on a
+shared machine the CPU seconds are what an otherwise idle core would take). Then the
+median and the worst of the seconds and of the ratio, and how many spectra meet the bar
+``--bar`` (default 0.05 x uniform, accepted).
 
-    J of stratified uniform sampling, of the initialization and of the result (at two
-    u-resolutions), the result / uniform ratio, the J of the earlier work's table for the
-    same lamp where ../shared/tables/reference-4x81 has one, the estimator health, and the
-    seconds the optimization took,
-
-then the median seconds per spectrum and how many results meet the acceptance bars of
-issue 2 (J <= 10% of uniform, health accepted, J below the reference table's).
-
-The work is restricted to one core per process (CPU affinity plus single-threaded XLA and
-BLAS), so the seconds are comparable across machines with different core counts. Use
-``--jobs N`` to run N spectra at once (N processes, one core each).
-
-Uses only the package's public interface (spectra, table, objective, optimize).
+The default list: the LSPDD exports in ../shared/spectra/lspdd (skipped when absent),
+every illuminant and light source colour-science ships (``colour.SDS_ILLUMINANTS`` as
+``cie:NAME``, ``colour.SDS_LIGHT_SOURCES`` as ``lamp:NAME``) and synthetic line spectra
+written here (``synthetic:NAME``: Gaussian lines of 0.1-2 nm, laser triplets, lines on a
+weak continuum, a line partly outside the range), and the earlier work's tables
+(../shared/tables/reference-4x81) scored against the same lamps.
 
 Examples::
 
-    .venv/bin/python scripts/bench_optimizer.py                  # everything (~minutes)
-    .venv/bin/python scripts/bench_optimizer.py cie:FL8 cie:A    # chosen spectra
+    taskset -c 0 .venv/bin/python scripts/bench_optimizer.py             # everything
+    .venv/bin/python scripts/bench_optimizer.py cie:FL8 synthetic:line-0.2nm
+    .venv/bin/python scripts/bench_optimizer.py --list                   # the default list
     .venv/bin/python scripts/bench_optimizer.py --csv bench.csv --tables out/bench/
 """
 
 from __future__ import annotations
 
+import argparse
+import csv
+import math
 import os
+import re
+import resource
+import shutil
+import statistics
+import subprocess
 import sys
-
-
-def _one_thread() -> None:
-    """Single-threaded XLA and BLAS (must run before JAX starts its backend)."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    os.environ.setdefault("MKL_NUM_THREADS", "1")
-    flags = os.environ.get("XLA_FLAGS", "")
-    if "intra_op_parallelism_threads" not in flags:
-        os.environ["XLA_FLAGS"] = (flags + " --xla_cpu_multi_thread_eigen=false"
-                                   " intra_op_parallelism_threads=1").strip()
-
-
-def _one_core(cpu: int = 0) -> None:
-    """Single-threaded XLA/BLAS and this process pinned to one CPU (the cpu-th allowed)."""
-    _one_thread()
-    if hasattr(os, "sched_setaffinity"):
-        allowed = sorted(os.sched_getaffinity(0))
-        os.sched_setaffinity(0, {allowed[(cpu or 0) % len(allowed)]})
-
-
-if __name__ == "__main__":
-    _one_thread()
-
-import argparse  # noqa: E402
-import csv  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
-import warnings  # noqa: E402
-from pathlib import Path  # noqa: E402
+import tempfile
+import time
+from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
@@ -78,173 +61,233 @@ REFERENCE_FOR = {
     "Honeybees-2": str(LSPDD / "2689.csv"),
 }
 
-COLUMNS = ["spectrum", "name", "J_uniform", "J_init", "J", "J_fine", "ratio", "reference",
-           "J_reference", "beats_reference", "bias_rel", "std_rel", "accepted", "solver",
-           "seconds", "cpu_seconds", "message"]
+COLUMNS = ["spectrum", "name", "nodes", "J_uniform", "J_init", "J", "J_fine", "ratio", "bias_rel",
+           "std_rel", "accepted", "seconds", "cpu_seconds", "reference", "J_reference", "message"]
+
+
+# --- Synthetic line spectra -----------------------------------------------------------
+
+#: Fine wavelength list of the synthetic spectra, nm (beyond the 380-780 range).
+_FINE_STEP = 0.01
+
+
+def _gauss(wl, centre, fwhm):
+    sigma = fwhm / (2.0 * math.sqrt(2.0 * math.log(2.0)))
+    import numpy as np
+
+    return np.exp(-0.5 * ((wl - centre) / sigma) ** 2)
+
+
+def synthetic(name: str):
+    """(wavelengths, values) of the synthetic spectrum ``name`` (see ``SYNTHETIC``)."""
+    import numpy as np
+
+    wl = np.round(np.arange(360.0, 830.0 + 1e-9, _FINE_STEP), 6)
+    g = lambda c, w: _gauss(wl, c, w)  # noqa: E731
+    if name.startswith("line-"):
+        return wl, g(532.0, float(name[5:-2]))
+    if name == "laser-triplet-0.5nm":
+        return wl, g(457.0, 0.5) + g(532.0, 0.5) + 0.8 * g(635.0, 0.5)
+    if name == "mercury-lines-0.6nm":
+        lines = ((404.7, 0.3), (435.8, 1.0), (546.1, 0.9), (577.0, 0.25), (579.1, 0.25))
+        return wl, 0.01 + sum(a * g(c, 0.6) for c, a in lines)
+    if name == "box-line-0.3nm":
+        return wl, ((wl >= 589.0) & (wl <= 589.3)).astype(float)
+    if name == "edge-line-1nm":
+        return wl, g(380.3, 1.0) + 0.5 * g(610.0, 1.0)
+    raise KeyError(name)
+
+
+SYNTHETIC = ["line-0.1nm", "line-0.2nm", "line-0.5nm", "line-2nm", "laser-triplet-0.5nm",
+             "mercury-lines-0.6nm", "box-line-0.3nm", "edge-line-1nm"]
+
+
+def write_spd(path: Path, wl, values) -> None:
+    """A pbrt ``.spd`` file (``lambda value`` per line)."""
+    with open(path, "w") as fh:
+        for x, v in zip(wl, values):
+            fh.write(f"{x:.6f} {v:.17g}\n")
+
+
+# --- The list -------------------------------------------------------------------------
 
 
 def default_specs() -> list[str]:
     specs = [str(p) for p in sorted(LSPDD.glob("*.csv"))] if LSPDD.is_dir() else []
-    specs += ["cie:A", "cie:D65"] + [f"cie:FL{i}" for i in range(1, 13)] + \
-             [f"cie:HP{i}" for i in range(1, 6)]
-    if CORNELL.is_file():
-        specs.append(str(CORNELL))
+    import colour
+
+    specs += [f"cie:{k}" for k in colour.SDS_ILLUMINANTS]
+    specs += [f"lamp:{k}" for k in colour.SDS_LIGHT_SOURCES]
+    specs += [f"synthetic:{k}" for k in SYNTHETIC]
     return specs
 
 
-def _field(obj, name, default=None):
-    return obj.get(name, default) if isinstance(obj, dict) else getattr(obj, name, default)
+# --- One spectrum, one process --------------------------------------------------------
 
 
-def run_one(spec: str, args_dict: dict) -> dict:
-    """Optimize one spectrum and measure it (runs in the worker process)."""
-    import numpy as np
+def _cli() -> list[str]:
+    exe = Path(sys.executable).with_name("wavelength-pdf")
+    return [str(exe)] if exe.is_file() else [sys.executable, "-m", "wavelength_pdf.cli"]
 
-    from wavelength_pdf import objective
-    from wavelength_pdf.optimize import optimize_spectrum
-    from wavelength_pdf.spectra import load_spectrum
-    from wavelength_pdf.table import Table, read_table, write_table
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sp = load_spectrum(spec)
-    step = args_dict["grid_step"]
-    grid = "auto" if step == "auto" else np.arange(380.0, 780.0 + 1e-9, float(step))
-    kwargs = {"grid": grid, "seed": args_dict["seed"], "max_seconds": args_dict["max_seconds"]}
-    if args_dict["solver"]:
-        kwargs["solver"] = args_dict["solver"]
-    t0, c0 = time.perf_counter(), time.process_time()
-    res = optimize_spectrum(sp, **kwargs)
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    health = _field(res, "health")
-    std = np.asarray(_field(health, "std_rel", [np.nan] * 3), dtype=float)
-    row = {
-        "spectrum": spec, "name": sp.name,
-        "J_uniform": float(_field(res, "J_uniform")), "J_init": float(_field(res, "J_init")),
-        "J": float(_field(res, "J")), "J_fine": float(_field(res, "J_fine")),
-        "bias_rel": float(_field(health, "bias_rel", np.nan)),
-        "std_rel": "/".join(f"{v:.3g}" for v in std),
-        "accepted": bool(_field(res, "accepted", False)),  # Result.accepted (Health.accepted is a method)
-        "solver": str(_field(res, "solver")), "seconds": float(_field(res, "seconds", wall)),
-        "cpu_seconds": cpu,
-        "message": str(_field(res, "message", "")), "reference": "", "J_reference": "",
-        "beats_reference": "",
-    }
-    row["ratio"] = row["J"] / row["J_uniform"]
-    # The earlier work's table for this lamp, evaluated by the same objective.
-    for ref, ref_spec in REFERENCE_FOR.items():
-        if ref_spec == spec and (REFERENCE / f"{ref}.csv").is_file():
-            t = read_table(REFERENCE / f"{ref}.csv")
-            problem = objective.make_problem(sp, t.grid)
-            j_ref = objective.J(problem, t.pdfs, objective.ORDER_FINE)
-            row.update(reference=ref, J_reference=j_ref, beats_reference=row["J_fine"] < j_ref)
-    if args_dict["tables"]:
-        out = Path(args_dict["tables"])
-        out.mkdir(parents=True, exist_ok=True)
-        t = _field(res, "table")
-        t = t if isinstance(t, Table) else Table(np.asarray(grid), np.asarray(t))
-        name = Path(spec).stem if ":" not in spec else spec.replace(":", "-")
-        write_table(out / f"{name}.csv", Table(t.grid, t.pdfs, [f"name: {sp.name}",
-                                                                 f"source: {spec}",
-                                                                 f"J: {row['J']!r}"]))
+def _child_env() -> dict:
+    env = dict(os.environ)
+    env.setdefault("OMP_NUM_THREADS", "1")
+    env.setdefault("OPENBLAS_NUM_THREADS", "1")
+    flags = env.get("XLA_FLAGS", "")
+    if "intra_op_parallelism_threads" not in flags:
+        env["XLA_FLAGS"] = (flags + " --xla_cpu_multi_thread_eigen=false"
+                            " intra_op_parallelism_threads=1").strip()
+    return env
+
+
+def _header(path: Path) -> dict:
+    out = {}
+    with open(path) as fh:
+        for line in fh:
+            if not line.startswith("#"):
+                break
+            key, sep, value = line[1:].partition(":")
+            if sep:
+                out.setdefault(key.strip(), value.strip())
+    return out
+
+
+def _float(s, default=float("nan")) -> float:
+    try:
+        return float(s)
+    except (TypeError, ValueError):
+        return default
+
+
+def run_one(spec: str, tmp: Path, extra: list[str], tables: Path | None) -> dict:
+    """Run ``wavelength-pdf optimize`` on ``spec`` in a child process and measure it."""
+    arg = spec
+    if spec.startswith("synthetic:"):
+        arg = str(tmp / f"{spec[10:]}.spd")
+        write_spd(Path(arg), *synthetic(spec[10:]))
+    out = tmp / "table.csv"
+    out.unlink(missing_ok=True)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(_cli() + ["optimize", arg, "-o", str(out), *extra],
+                          capture_output=True, text=True, env=_child_env())
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    row = {"spectrum": spec, "seconds": wall, "cpu_seconds": cpu, "accepted": False,
+           "message": (proc.stdout.strip().splitlines() or [""])[-1][-160:]}
+    if out.is_file():
+        h = _header(out)
+        with open(out) as fh:
+            nodes = sum(1 for line in fh if line[:1].isdigit())
+        row.update(name=h.get("name", ""), nodes=nodes, J_uniform=_float(h.get("J_uniform")),
+                   J_init=_float(h.get("J_init")), J=_float(h.get("J")),
+                   J_fine=_float(h.get("J_fine")), bias_rel=_float(h.get("bias_rel")),
+                   std_rel=h.get("std_rel", ""), accepted=h.get("accepted") == "True",
+                   message=h.get("message", ""))
+        row["ratio"] = row["J"] / row["J_uniform"]
+        if tables is not None:
+            tables.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(out, tables / (re.sub(r"[^\w.+-]+", "_", spec).strip("_") + ".csv"))
+    else:
+        # Not accepted (no table is written) or failed: the summary line has the ratio.
+        m = re.search(r"= ([0-9.eE+-]+) x uniform", proc.stdout)
+        row.update(name=spec, ratio=_float(m[1]) if m else float("nan"),
+                   message=(proc.stdout + proc.stderr).strip()[-300:] or f"exit {proc.returncode}")
     return row
 
 
-def _worker(job: tuple[int, str, dict]) -> dict:
-    i, spec, args_dict = job
-    try:
-        return run_one(spec, args_dict)
-    except Exception as e:  # report and go on with the other spectra
-        return {"spectrum": spec, "name": "", "message": f"{type(e).__name__}: {e}"}
+def score_references(rows: list[dict], tmp: Path) -> None:
+    """J of the earlier work's table for the same lamp, by the project's evaluator."""
+    by_spec = {r["spectrum"]: r for r in rows}
+    todo = [(ref, spec) for ref, spec in REFERENCE_FOR.items()
+            if spec in by_spec and (REFERENCE / f"{ref}.csv").is_file()]
+    if not todo:
+        return
+    from wavelength_pdf.optimize import evaluate_table
+    from wavelength_pdf.spectra import load_spectrum
+    from wavelength_pdf.table import read_table
+
+    for ref, spec in todo:
+        try:
+            e = evaluate_table(load_spectrum(spec), read_table(REFERENCE / f"{ref}.csv"))
+            by_spec[spec].update(reference=ref, J_reference=e["J"])
+        except Exception as exc:  # a reference that cannot be scored is reported, not fatal
+            by_spec[spec].update(reference=ref, J_reference=f"error: {exc}")
 
 
-def _init(cpu_counter) -> None:
-    with cpu_counter.get_lock():
-        cpu = cpu_counter.value
-        cpu_counter.value += 1
-    _one_core(cpu)
+def _fmt(r: dict, key: str, fmt: str) -> str:
+    v = r.get(key, "")
+    return format(v, fmt) if isinstance(v, (int, float)) and not isinstance(v, bool) else str(v)
 
 
 def _print_row(r: dict) -> None:
-    def f(key, fmt):
-        v = r.get(key, "")
-        return format(v, fmt) if isinstance(v, (int, float)) and not isinstance(v, bool) else str(v)
-
-    if not r.get("name"):
-        print(f"{r['spectrum'][-34:]:34s}  FAILED: {r.get('message')}", flush=True)
-        return
-    ref = (f"  ref {r['reference']} {r['J_reference']:.4g} "
-           f"{'beaten' if r['beats_reference'] else 'NOT beaten'}") if r.get("reference") else ""
-    print(f"{r['name'][:34]:34s} {f('J_uniform', '9.4g')} {f('J_init', '9.4g')} "
-          f"{f('J', '9.4g')} {f('J_fine', '9.4g')} {f('ratio', '7.4f')} "
-          f"{f('bias_rel', '8.1e')} {r['std_rel']:>20s} {'yes' if r['accepted'] else 'NO ':3s} "
-          f"{f('seconds', '7.1f')} {f('cpu_seconds', '7.1f')}{ref}", flush=True)
+    print(f"{r['spectrum'][-38:]:38s} {_fmt(r, 'nodes', '5d')} {_fmt(r, 'J_uniform', '9.4g')} "
+          f"{_fmt(r, 'J_init', '9.4g')} {_fmt(r, 'J', '9.4g')} {_fmt(r, 'J_fine', '9.4g')} "
+          f"{_fmt(r, 'ratio', '7.4f')} {_fmt(r, 'bias_rel', '8.1e')} "
+          f"{'yes' if r['accepted'] else 'NO ':3s} {_fmt(r, 'seconds', '6.1f')} "
+          f"{_fmt(r, 'cpu_seconds', '6.1f')}" + ("" if r["accepted"] else f"  {r['message'][-100:]}"),
+          flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("spectra", nargs="*", help="spectra (default: LSPDD + CIE A, D65, FL1-12, "
-                                              "HP1-5 + the cornell-box lamp)")
-    p.add_argument("--solver", default=None, help="solver name (default: the package default)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--grid-step", default="auto",
-                   help="table grid step in nm, or 'auto' (default: the optimizer's line-refined grid)")
-    p.add_argument("--max-seconds", type=float, default=None, help="time budget per spectrum")
-    p.add_argument("--jobs", type=int, default=1, help="spectra at once, one core each")
+    p.add_argument("spectra", nargs="*", help="spectra (default: the list above)")
+    p.add_argument("--bar", type=float, default=0.05, help="J / J_uniform bar (default 0.05)")
+    p.add_argument("--list", action="store_true", help="print the default list and stop")
     p.add_argument("--csv", default=None, help="also write the rows to this CSV file")
-    p.add_argument("--tables", default=None, help="also write each result table to this folder")
+    p.add_argument("--tables", default=None, help="also copy each table to this folder")
+    p.add_argument("extra", nargs=argparse.REMAINDER,
+                   help="after '--': options passed to 'wavelength-pdf optimize'")
     args = p.parse_args(argv)
-
+    extra = args.extra[1:] if args.extra[:1] == ["--"] else args.extra
     specs = args.spectra or default_specs()
-    args_dict = {"solver": args.solver, "seed": args.seed, "grid_step": args.grid_step,
-                 "max_seconds": args.max_seconds, "tables": args.tables}
-    print(f"{len(specs)} spectra, {args.jobs} process(es) with one core and one XLA thread each")
-    print(f"{'spectrum':34s} {'J unif':>9s} {'J init':>9s} {'J':>9s} {'J fine':>9s} "
-          f"{'J/unif':>7s} {'bias':>8s} {'std/c X/Y/Z':>20s} ok  {'seconds':>7s} {'cpu s':>7s}")
+    if args.list:
+        print("\n".join(specs))
+        return 0
+
+    print(f"{len(specs)} spectra, one 'wavelength-pdf optimize' process each, one XLA thread, "
+          f"CPU affinity {sorted(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else '?'}")
+    print(f"{'spectrum':38s} {'nodes':>5s} {'J unif':>9s} {'J init':>9s} {'J':>9s} {'J fine':>9s} "
+          f"{'J/unif':>7s} {'bias':>8s} ok  {'wall s':>6s} {'cpu s':>6s}")
     rows: list[dict] = []
-    jobs = [(i, s, args_dict) for i, s in enumerate(specs)]
-    if args.jobs <= 1:
-        _one_core(0)
-        for job in jobs:
-            rows.append(_worker(job))
+    tables = Path(args.tables) if args.tables else None
+    with tempfile.TemporaryDirectory(prefix="bench-optimizer-") as tmp:
+        for spec in specs:
+            rows.append(run_one(spec, Path(tmp), extra, tables))
             _print_row(rows[-1])
-    else:
-        import concurrent.futures as cf
-        import multiprocessing
+        score_references(rows, Path(tmp))
 
-        ctx = multiprocessing.get_context("spawn")  # JAX is not fork-safe
-        counter = ctx.Value("i", 0)
-        with cf.ProcessPoolExecutor(args.jobs, mp_context=ctx, initializer=_init,
-                                    initargs=(counter,)) as pool:
-            for row in pool.map(_worker, jobs):
-                rows.append(row)
-                _print_row(row)
-
-    ok = [r for r in rows if r.get("name")]
-    if ok:
-        secs = [r["seconds"] for r in ok]
-        cpus = [r["cpu_seconds"] for r in ok]
-        print()
-        print(f"median seconds per spectrum (one core): {statistics.median(secs):.1f} wall "
-              f"(min {min(secs):.1f}, max {max(secs):.1f}, total {sum(secs):.0f}); "
-              f"{statistics.median(cpus):.1f} CPU (the wall time on an otherwise idle core)")
-        print(f"accepted: {sum(r['accepted'] for r in ok)}/{len(ok)}; "
-              f"J <= 0.1 x uniform: {sum(r['ratio'] <= 0.1 for r in ok)}/{len(ok)}; "
-              f"median J/uniform {statistics.median(r['ratio'] for r in ok):.4f}")
-        refs = [r for r in ok if r.get("reference")]
-        if refs:
-            print(f"beats the reference table: {sum(bool(r['beats_reference']) for r in refs)}"
-                  f"/{len(refs)} (" + ", ".join(
-                      f"{r['reference']} {r['J_fine'] / r['J_reference']:.3f}x" for r in refs) + ")")
-    if len(ok) < len(rows):
-        print(f"{len(rows) - len(ok)} spectra failed")
+    secs = [r["seconds"] for r in rows]
+    cpus = [r["cpu_seconds"] for r in rows]
+    ratios = [r.get("ratio", float("nan")) for r in rows]
+    worst = max(rows, key=lambda r: r.get("ratio", float("inf")) if not math.isnan(r.get("ratio", float("nan"))) else float("inf"))
+    slowest = max(rows, key=lambda r: r["cpu_seconds"])
+    good = [r for r in rows if r["accepted"] and r.get("ratio", float("inf")) <= args.bar]
+    print()
+    print(f"whole-process seconds per spectrum: median {statistics.median(secs):.1f} wall, "
+          f"{statistics.median(cpus):.1f} CPU; worst {max(secs):.1f} wall, {slowest['cpu_seconds']:.1f} CPU "
+          f"({slowest['spectrum']}); total {sum(secs):.0f} wall, {sum(cpus):.0f} CPU")
+    print(f"J / J_uniform: median {statistics.median([x for x in ratios if not math.isnan(x)] or [float('nan')]):.4f}, "
+          f"worst {worst.get('ratio', float('nan')):.4f} ({worst['spectrum']})")
+    print(f"accepted: {sum(r['accepted'] for r in rows)}/{len(rows)}; accepted and J <= {args.bar:g} x uniform: "
+          f"{len(good)}/{len(rows)}")
+    for r in rows:
+        if r not in good:
+            print(f"  above the bar or not accepted: {r['spectrum']} ratio {_fmt(r, 'ratio', '.4f')} "
+                  f"accepted {r['accepted']}")
+    refs = [r for r in rows if isinstance(r.get("J_reference"), float)]
+    if refs:
+        print("earlier work's tables, J / ours: " + ", ".join(
+            f"{r['reference']} {r['J_reference'] / r['J']:.2f}x" for r in refs if r.get("J")))
     if args.csv:
         with open(args.csv, "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=COLUMNS, extrasaction="ignore")
             w.writeheader()
             w.writerows(rows)
-    return 0 if len(ok) == len(rows) else 1
+    return 0 if len(good) == len(rows) else 1
 
 
 if __name__ == "__main__":

@@ -42,11 +42,9 @@ def cmfs() -> tuple[np.ndarray, np.ndarray]:
         xbar, ybar, zbar. The objective treats them as piecewise linear between these
         nodes and zero outside.
     """
-    import colour  # imported lazily: colour-science takes a second to import
+    from . import colour_data  # colour-science's table, without importing it each run
 
-    c = colour.MSDS_CMFS[OBSERVER]
-    wl = np.asarray(c.wavelengths, dtype=np.float64).copy()
-    vals = np.asarray(c.values, dtype=np.float64).copy()
+    wl, vals = colour_data.cmfs()
     wl.setflags(write=False)
     vals.setflags(write=False)
     return wl, vals
@@ -55,10 +53,9 @@ def cmfs() -> tuple[np.ndarray, np.ndarray]:
 @lru_cache(maxsize=1)
 def white_d65() -> np.ndarray:
     """XYZ of the D65 white point with Y = 1 (CIE 1931 2-degree chromaticity 0.3127, 0.3290)."""
-    import colour
+    from . import colour_data
 
-    xy = colour.CCS_ILLUMINANTS[OBSERVER]["D65"]
-    xyz = np.asarray(colour.xyY_to_XYZ(colour.xy_to_xyY(xy)), dtype=np.float64)
+    xyz = colour_data.white_d65()
     xyz.setflags(write=False)
     return xyz
 

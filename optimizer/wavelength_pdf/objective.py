@@ -60,12 +60,25 @@ from .model import DEFAULT_GRID  # noqa: E402  (380, 385, ..., 780 nm; design §
 ORDER = 2
 ORDER_FINE = 4
 
+#: Gauss-Legendre points per piece while the solvers search (the midpoint rule: the
+#: pieces between breakpoints are short, and the tables found are judged at ``ORDER``
+#: and ``ORDER_FINE``).
+SEARCH_ORDER = 1
+
 #: Width (nm) of the ramp that stands in for the jump of a spectrum that stops at a
 #: non-zero value inside the table range (its effect on any integral is ~1e-12 relative).
 _JUMP_RAMP_NM = 1e-9
 
 #: Node arrays are padded to a multiple of this many entries (fewer distinct jit shapes).
 _PAD = 256
+
+#: Spectra with more than ``SPECTRUM_MAX_SAMPLES`` samples (a line written on a 0.01 nm
+#: list) drop the samples that linear interpolation between the kept ones reproduces to
+#: ``SPECTRUM_TOL`` of the peak (runs of zeros, straight stretches, far tails of lines):
+#: J changes by ~1e-9 relative, the work per evaluation can drop a hundredfold. Smaller
+#: spectra are used exactly as given.
+SPECTRUM_TOL = 1e-9
+SPECTRUM_MAX_SAMPLES = 2000
 
 
 @dataclass(frozen=True)
@@ -174,6 +187,8 @@ def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID) -> Problem:
     if not np.all(np.diff(wl) > 0):
         raise ValueError(f"{source}: spectrum wavelengths are not strictly increasing")
     lo, hi = float(grid[0]), float(grid[-1])
+    if wl.size > SPECTRUM_MAX_SAMPLES and np.max(val) > 0:
+        wl, val = _thin_spectrum(wl, val, SPECTRUM_TOL * np.max(val))
 
     # Union of all nodes inside the range, then every function evaluated on it exactly.
     swl, sval = _with_ramps(wl, val)
@@ -261,6 +276,16 @@ def _polyline_keep(x: np.ndarray, Y: np.ndarray, tol: np.ndarray) -> np.ndarray:
             keep[m] = True
             stack += [(a, m), (m, b)]
     return keep
+
+
+def _thin_spectrum(wl: np.ndarray, val: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Samples of a piecewise-linear spectrum that reproduce it within ``tol``: first the
+    inside of runs of equal values goes (exact), then Ramer-Douglas-Peucker."""
+    same = np.zeros(wl.size, dtype=bool)
+    same[1:-1] = (val[1:-1] == val[:-2]) & (val[1:-1] == val[2:])
+    wl, val = wl[~same], val[~same]
+    keep = _polyline_keep(wl, val[:, None], np.array([tol]))
+    return wl[keep], val[keep]
 
 
 def simplify(problem: Problem, rel_tol: float) -> Problem:
@@ -547,7 +572,7 @@ _uniform_moments_jit = jax.jit(_uniform_moments)
 
 def _moments_at(problem: Problem, P: Array, order: int):
     glx, glw = gauss_legendre(order)
-    if order == ORDER:
+    if order == SEARCH_ORDER:
         one = jnp.ones(3)
         (_, aux), _ = penalized_value_and_grad(P, problem.arrays, glx, glw, one, 0.0, 0.0)
         return aux
@@ -589,7 +614,8 @@ def enable_compilation_cache() -> str | None:
     try:
         path.mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", str(path))
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+        # Every compiled function, however quick to compile: a process compiles ~30.
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     except (OSError, AttributeError, ValueError):
         _cache_dir = ""
         return None

@@ -24,20 +24,13 @@ from typing import Callable
 
 import numpy as np
 
-from . import grids, health as health_mod, init as init_mod, objective, solvers
+from . import grids, health as health_mod, init as init_mod, objective
 from .model import DEFAULT_GRID, trapezoid
 from .precision import float64
 from .result import Result
 from .solvers import DEFAULT_SOLVER, SOLVERS
 from .table import Table
 from .threads import single_threaded_blas
-
-#: ``grid="auto"``: refine the grid further while J is above this share of stratified
-#: uniform J (the target of design §4 is 0.1).
-AUTO_TARGET = 0.08
-
-#: Evaluation budget of the polish after a further refinement.
-POLISH_EVALS = 600
 
 __all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget", "DEFAULT_GRID",
            "SOLVERS"]
@@ -56,8 +49,6 @@ def evaluation_budget(solver: str = DEFAULT_SOLVER, grid: np.ndarray | str = "au
     n = (solver_options or {}).get("max_evals")
     if n is None:
         n = inspect.signature(SOLVERS[solver]).parameters["max_evals"].default
-    if isinstance(grid, str):
-        n += POLISH_EVALS * (len(grids.REFINED) - 1)
     return int(n)
 
 
@@ -74,11 +65,7 @@ def _offset_progress(progress, offset: list):
 
 def _auto_grid(spectrum) -> np.ndarray:
     """The default grid, or for a line lamp the default grid refined around its lines."""
-    base = objective.make_problem(spectrum, DEFAULT_GRID)
-    if not grids.is_spiky(base, DEFAULT_GRID):
-        return DEFAULT_GRID.copy()
-    n, step = grids.REFINED[0]
-    return grids.refine(base, DEFAULT_GRID, n, step)
+    return grids.auto_grid(objective.make_problem(spectrum, DEFAULT_GRID), DEFAULT_GRID)
 
 
 @float64
@@ -99,10 +86,9 @@ def optimize_spectrum(
     spectrum : wavelength_pdf.spectra.Spectrum
         The lamp, at its own resolution.
     grid : (M+1,) array (nm), or "auto"
-        Table nodes (nm), or "auto" (the default, as on the command line): the default
-        grid (380..780 nm in 5 nm steps) for smooth spectra; for line lamps
-        (``grids.is_spiky``) the default grid refined around the lines, and refined once
-        more (then polished) if J is still above ``AUTO_TARGET`` times uniform J.
+        Table nodes (default 380..780 nm in 5 nm steps). "auto": the default grid for
+        smooth spectra; for line lamps (``grids.is_spiky``) the default grid refined
+        at the lines' edges and peaks (``grids.auto_grid``).
     solver : str
         A name in ``solvers.SOLVERS``.
     seed : int
@@ -141,26 +127,6 @@ def optimize_spectrum(
                               max_seconds=max_seconds, **(solver_options or {}))
     history = list(run.history)
     offset[0] += run.nfev
-    level = 1
-    while auto and level < len(grids.REFINED) and \
-            objective.J(problem, run.P) > AUTO_TARGET * objective.uniform_J(problem):
-        # Still above target: refine around the lines again and continue from the result.
-        n, step = grids.REFINED[level]
-        finer = grids.refine(problem, grid, n, step)
-        if finer.size == grid.size:
-            break
-        fine_problem = objective.make_problem(spectrum, finer)
-        P_start = np.stack([np.interp(finer, grid, p) for p in run.P])
-        remaining = None if max_seconds is None else max(max_seconds - (time.monotonic() - t0), 1.0)
-        fine_P0 = init_mod.equal_mass_partition(fine_problem)
-        with single_threaded_blas():
-            fine_run = solvers.polish(fine_problem, P_start, fine_P0,
-                                      progress=_offset_progress(progress, offset),
-                                      max_seconds=remaining, max_evals=POLISH_EVALS)
-        offset[0] += fine_run.nfev
-        history += fine_run.history
-        grid, problem, P0, run = finer, fine_problem, fine_P0, fine_run
-        level += 1
     P = _normalize_rows(grid, run.P)
     J, J_fine = objective.J_pair(problem, P)
     result = Result.judge(

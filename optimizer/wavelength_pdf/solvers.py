@@ -65,8 +65,9 @@ PENALTY_WEIGHT = 10.0
 #: problem. 0 searches on the exact problem.
 SEARCH_TOL = 1e-3
 
-#: Share of the remaining evaluations the best finalist may use on the table grid.
-FIRST_SHARE = 0.7
+#: Share of the remaining evaluations the best finalist may use on the table grid (an
+#: even split: the best start after screening is often not the best after polishing).
+FIRST_SHARE = 0.5
 
 Progress = Callable[[int, float], None]
 
@@ -219,7 +220,7 @@ class _Context:
         self.problem = problem
         self.search = objective.simplify(problem, SEARCH_TOL if search_tol is None else search_tol)
         self.arr = self.search.arrays
-        self.glx, self.glw = objective.gauss_legendre(objective.ORDER)
+        self.glx, self.glw = objective.gauss_legendre(objective.SEARCH_ORDER)
         s = init_mod.support_density(problem)
         self.s = jnp.asarray(s)
         self.support = s > 0
@@ -229,7 +230,7 @@ class _Context:
         # exact one (``health_init``).
         self.var_ref = self._variance(P_init)
         self._var_refs: dict[int, jax.Array] = {1: self.var_ref}
-        self.J_init = objective.J(self.search, P_init)
+        self.J_init = objective.J(self.search, P_init, objective.SEARCH_ORDER)
         self.mu = float(penalty_weight * max(self.J_init, 1e-3))
         self.progress = progress
         self.max_evals = max_evals
@@ -241,7 +242,7 @@ class _Context:
         self._jlevels: dict[int, tuple] = {}
 
     def _variance(self, P: np.ndarray) -> jax.Array:
-        _, m1, m2 = objective.moments(self.search, P, objective.ORDER)
+        _, m1, m2 = objective.moments(self.search, P, objective.SEARCH_ORDER)
         c = self.search.c
         var = np.maximum(m2 - (m1 - c) ** 2, 0.0)
         return jnp.asarray(np.maximum(var, 1e-24 * c**2 + 1e-300))
@@ -434,18 +435,24 @@ def ipopt(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress
 
 
 def multistage(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
-               max_seconds: float | None = None, max_evals: int = 1500, strides: tuple[int, ...] = (4, 2, 1),
-               screen_iters: int = 60, n_random: int = 2, n_keep: int = 2, coarse_iters: int = 150,
-               stage_iters: int = 100) -> SolverResult:
+               max_seconds: float | None = None, max_evals: int = 1000, strides: tuple[int, ...] = (4, 1),
+               screen_iters: int = 60, n_random: int = 0, n_keep: int = 2, coarse_iters: int = 150,
+               stage_iters: int = 150, starts: tuple[str, ...] = ("quarters", "windows"),
+               fine_starts: tuple[str, ...] = ("equal-mass",), first_share: float = FIRST_SHARE
+               ) -> SolverResult:
     """Multi-start, multi-level, multi-parameterization L-BFGS-B; keeps the best accepted.
 
     1. Screen on the coarsest level (every ``strides[0]``-th table node): a short run in
-       the logits (softmax) parameterization from each starting point of
-       ``init.starting_points`` (the equal-mass partition first).
+       the logits (softmax) parameterization from each of ``starts`` (names of
+       ``init.starting_points``: the range quarters and windows, which win on smooth
+       spectra; the other starts rarely win and cost evaluations) and ``n_random``
+       random ones; and the same on the table grid from each of ``fine_starts`` (the
+       equal-mass partition, which wins on line lamps, where a coarse grid would lose
+       the lines).
     2. Carry the ``n_keep`` best through the finer levels (logits, ``coarse_iters``
        each); a coarse table is exactly representable on a finer grid.
     3. On the table grid, share the remaining budget among them: alternate runs in the
-       bounded values and the logits parameterization until a round gains less than 0.1 %.
+       logits and the bounded values parameterization until a round gains less than 0.1 %.
        Logits move mass smoothly and cannot reach zero; bounded values can put exact zeros
        and lift them again.
     4. Return the lowest-J table among them that the health check accepts (unbiased, no
@@ -456,18 +463,21 @@ def multistage(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Pro
     if not levels or levels[-1].stride != 1:
         levels.append(ctx.fine)
     coarse = levels[0]
-    starts = init_mod.starting_points(problem, seed=seed, n_random=n_random, grid=coarse.grid)
+    all_starts = init_mod.starting_points(problem, seed=seed, n_random=n_random, grid=coarse.grid)
+    fine_all = init_mod.starting_points(problem, seed=seed, n_random=0)
+    todo = [(k, V, coarse) for k, V in all_starts.items() if k in starts or k.startswith("random")]
+    todo += [(k, fine_all[k], ctx.fine) for k in fine_starts if k in fine_all]
     # Small budgets shrink the screening and the intermediate levels so that at least
     # half of the evaluations are left for the table grid (L-BFGS-B uses ~1.2
     # evaluations per iteration).
-    screen_iters = max(3, min(screen_iters, int(0.3 * max_evals / (1.2 * len(starts)))))
+    screen_iters = max(3, min(screen_iters, int(0.3 * max_evals / (1.2 * max(len(todo), 1)))))
     n_mid = max(len(levels) - 2, 1) * n_keep
     coarse_iters = max(3, min(coarse_iters, int(0.2 * max_evals / (1.2 * n_mid))))
     screened = []
-    for name, V in starts.items():
+    for name, V, level in todo:
         if ctx.out_of_budget():
             break
-        pt = _run_scipy(ctx, _Point(V=V, level=coarse, name=name), coarse, "logits", "L-BFGS-B", screen_iters)
+        pt = _run_scipy(ctx, _Point(V=V, level=level, name=name), level, "logits", "L-BFGS-B", screen_iters)
         screened.append(pt)
     screened.sort(key=lambda p: p.val)
     kept = screened[:n_keep]
@@ -480,18 +490,20 @@ def multistage(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Pro
         # The most promising candidate may use most of what is left; a stalled one
         # leaves the rest to the next.
         left = ctx.max_evals - ctx.nfev
-        share = left if rank == len(kept) - 1 else int(left * FIRST_SHARE)
+        share = left if rank == len(kept) - 1 else int(left * first_share)
         finalists.append(_alternate(ctx, pt, fine, ctx.nfev + share, stage_iters))
     return _best_accepted(ctx, finalists, P0, "multistage")
 
 
 def _alternate(ctx: _Context, pt: _Point, level: Level, stop_at: int, stage_iters: int) -> tuple[_Point, int]:
-    """Alternate bounded-values and logits L-BFGS-B runs on ``level`` until a round gains
-    less than 0.1 % or ``stop_at`` evaluations are reached; returns (best, rounds)."""
+    """Alternate logits and bounded-values L-BFGS-B runs on ``level`` until a round gains
+    less than 0.1 % or ``stop_at`` evaluations are reached; returns (best, rounds).
+
+    Logits first: from a screened start they make the larger gains per evaluation."""
     rounds = 0
     while not ctx.out_of_budget() and ctx.nfev < stop_at:
         before = pt.val
-        for pname in ("values", "logits"):
+        for pname in ("logits", "values"):
             if ctx.out_of_budget() or ctx.nfev >= stop_at:
                 break
             new = _run_scipy(ctx, pt, level, pname, "L-BFGS-B", min(stage_iters, stop_at - ctx.nfev))

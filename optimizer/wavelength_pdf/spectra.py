@@ -187,24 +187,20 @@ def _lookup(table, name: str, kind: str, prefix: str):
     return key, table[key]
 
 
-def _from_sd(sd, name: str, source: str) -> Spectrum:
-    return make_spectrum(name, source, np.array(sd.wavelengths), np.array(sd.values))
-
-
 def cie_illuminant(name: str) -> Spectrum:
     """A standard illuminant that colour-science ships (``colour.SDS_ILLUMINANTS``), by name."""
-    import colour
+    from . import colour_data  # colour-science's data, without importing it each run
 
-    key, sd = _lookup(colour.SDS_ILLUMINANTS, name, "CIE illuminant", "cie:")
-    return _from_sd(sd, key, f"cie:{key}")
+    key, (wl, val) = _lookup(colour_data.spectra("illuminants"), name, "CIE illuminant", "cie:")
+    return make_spectrum(key, f"cie:{key}", wl, val)
 
 
 def light_source(name: str) -> Spectrum:
     """A light source that colour-science ships (``colour.SDS_LIGHT_SOURCES``), by name."""
-    import colour
+    from . import colour_data
 
-    key, sd = _lookup(colour.SDS_LIGHT_SOURCES, name, "light source", "lamp:")
-    return _from_sd(sd, key, f"lamp:{key}")
+    key, (wl, val) = _lookup(colour_data.spectra("light_sources"), name, "light source", "lamp:")
+    return make_spectrum(key, f"lamp:{key}", wl, val)
 
 
 # --------------------------------------------------------------------------------------

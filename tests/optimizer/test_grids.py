@@ -32,14 +32,18 @@ def test_refine_adds_nodes_around_the_lines_only():
     assert g.size == 161
     assert np.all(np.isin(base, g))  # a table on the base grid is representable exactly
     assert np.min(np.diff(g)) >= 1.25 - 1e-9
-    # The lines get the finest steps first.
+    # The lines get the finest steps first, and a node close to each peak (splits are
+    # made at the breakpoint furthest from the chord).
     for c in (436.0, 546.0, 611.0):
         near = (g[:-1] >= c - 3.0) & (g[1:] <= c + 3.0)
-        assert np.all(np.diff(g)[near] == 1.25), c
+        assert np.any(near) and np.all(np.diff(g)[near] <= 2.5), c
+        assert np.min(np.abs(g - c)) <= 0.5, c
     # Where the lamp is a flat continuum, the default 5 nm steps stay.
     far = (g[:-1] >= 660.0) & (g[1:] <= 780.0)
-    assert np.all(np.diff(g)[far] >= 2.5)
+    assert np.all(np.diff(g)[far] >= 2.0)
     assert grids.interpolation_error(p, g) < 0.3 * grids.interpolation_error(p, base)
+    # Splitting reduces the error segment by segment.
+    assert grids.interpolation_error(p, grids.refine(p, base, 121, 1.25)) > grids.interpolation_error(p, g)
     # Errors of a grid's segments add up to its total error.
     assert np.sum(grids.segment_errors(p, g)) == grids.interpolation_error(p, g)
 
@@ -48,3 +52,13 @@ def test_refine_stops_at_the_smallest_step():
     p = objective.make_problem(_lines())
     g = grids.refine(p, np.array([430.0, 440.0]), 1000, 2.5)
     assert g.size < 1000 and np.min(np.diff(g)) >= 2.5 - 1e-9
+
+
+def test_refine_stops_at_the_target_error_and_fill_to_reaches_the_bucket():
+    p = objective.make_problem(_lines())
+    base = objective.DEFAULT_GRID
+    g = grids.refine(p, base, 481, grids.MIN_STEP_NM, target_error=0.01)
+    assert g.size < 481 and grids.interpolation_error(p, g) <= 0.01
+    f = grids.fill_to(g, grids.bucket(g.size))
+    assert f.size == grids.bucket(g.size) and np.all(np.isin(g, f))
+    assert grids.bucket(10) == grids.BUCKETS[0] and grids.bucket(10**6) == grids.BUCKETS[-1]

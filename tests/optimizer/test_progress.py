@@ -4,15 +4,20 @@ from __future__ import annotations
 import io
 
 from wavelength_pdf import progress
-from wavelength_pdf.optimize import POLISH_EVALS, evaluation_budget
-from wavelength_pdf.grids import REFINED
+import inspect
+
+from wavelength_pdf.optimize import evaluation_budget
+from wavelength_pdf.solvers import SOLVERS
 
 
-def test_budget_is_the_solvers_plus_the_polishes():
+def test_budget_is_the_solvers():
     assert evaluation_budget("lbfgsb", grid=[380.0, 780.0]) == 900
     assert evaluation_budget("multistage", grid=[380.0, 780.0],
                              solver_options={"max_evals": 40}) == 40
-    assert evaluation_budget("multistage", grid="auto") == 1500 + POLISH_EVALS * (len(REFINED) - 1)
+    # The auto grid is chosen before optimizing (no second, polished refinement any more).
+    default = inspect.signature(SOLVERS["multistage"]).parameters["max_evals"].default
+    assert evaluation_budget("multistage", grid="auto") == default
+    assert evaluation_budget("multistage", grid="auto") == evaluation_budget("multistage", grid=[380.0, 780.0])
 
 
 def test_not_a_terminal_gets_plain_lines():

@@ -14,8 +14,6 @@ import time
 from pathlib import Path
 from typing import Sequence
 
-from wavelength_pdf import plots
-from wavelength_pdf.evaluation import report
 from wavelength_pdf import data, progress
 from wavelength_pdf.evaluation.protocol import (DEFAULT_METHODS, DEFAULT_SPP, Config, check_config, evaluate,
                                                 finish, plan, write_rows)
@@ -205,6 +203,8 @@ def _images(config: Config) -> int:
 def job_outputs(ev, spectrum, outdir: Path) -> None:
     """A finished evaluation's plots: error against spp and time, error maps, colour bar,
     densities, and its results.md."""
+    from wavelength_pdf import plots  # matplotlib: imported when a plot is drawn
+    from wavelength_pdf.evaluation import report
     title = f"{ev.rows[0].scene} under {spectrum.name}"
     report.plot_error(ev.rows, outdir / "error-vs-spp-and-time.png", title)
     report.plot_error_maps(ev.error_maps, outdir / "error-maps.png", title)
@@ -252,6 +252,7 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
 
 
 def cmd_evaluate(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     with progress.bar(total=_images(config), desc="evaluate", file=sys.stderr, unit="image") as bar:
         ev = run_one(args.scene, args.spectrum, args.outdir, config, args.table, bar, args.renderer)
@@ -271,7 +272,7 @@ def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: 
     (:mod:`.cluster`: a local one of ``workers`` processes, or the one at ``scheduler``); write
     the combined report. ``tables[i]``: a ready table for job i instead of optimizing one;
     ``published[i]``: job i's published ratio, shown beside the measured one."""
-    from wavelength_pdf.evaluation import cluster
+    from wavelength_pdf.evaluation import cluster, report
 
     for scene, _ in jobs:
         if not Path(scene).is_file():
@@ -320,6 +321,7 @@ def _pair(text: str) -> tuple[Path, str]:
 
 
 def cmd_grid(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     jobs = list(itertools.product(args.scenes, args.spectra)) + [_pair(t) for t in args.pairs]
     if not jobs:
@@ -372,6 +374,7 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
     keeping the folder layout so that the report's relative links still resolve. Nothing else
     goes: not the renders, not the tables, and not densities.png, which draws the lamp spectrum
     itself (licensed data such as the LSPDD spectra must not be redistributed)."""
+    from wavelength_pdf.evaluation import report
     names = ["report.md", "results.csv", *report.report_images(outdir / "report.md")]
     copied = []
     for name in sorted(names):
@@ -382,6 +385,7 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
 
 
 def cmd_demo(args) -> int:
+    from wavelength_pdf.evaluation import report
     config = _config(args)
     if args.renderer == "mitsuba" and args.scene == DEMO_SCENE:
         args.scene = DEMO_SCENE.with_suffix(".xml")

@@ -7,22 +7,32 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import colour
 import numpy as np
 
-#: The white of the Lab conversion: D65 chromaticity, Y = 1 (SPEC 6).
-D65_XY = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+# colour-science is imported where it is used: importing it takes a second (it imports
+# matplotlib), and the command line imports this module for every subcommand.
+
+
+def _d65_xy() -> np.ndarray:
+    """The white of the Lab conversion: D65 chromaticity, Y = 1 (SPEC 6)."""
+    import colour
+
+    return colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
 
 
 def rgb_to_xyz(rgb: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
     """Linear RGB (..., 3) in a named colour space to CIE XYZ, without any decoding."""
+    import colour
+
     cs = colour.RGB_COLOURSPACES[colourspace]
     return np.asarray(rgb, dtype=np.float64) @ np.asarray(cs.matrix_RGB_to_XYZ).T
 
 
 def rgb_to_lab(rgb: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
     """Linear RGB (..., 3) to CIELAB with the D65 white at Y = 1."""
-    return colour.XYZ_to_Lab(rgb_to_xyz(rgb, colourspace), D65_XY)
+    import colour
+
+    return colour.XYZ_to_Lab(rgb_to_xyz(rgb, colourspace), _d65_xy())
 
 
 def delta_e_map(image: np.ndarray, truth: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
@@ -31,6 +41,8 @@ def delta_e_map(image: np.ndarray, truth: np.ndarray, colourspace: str = "sRGB")
         raise ValueError(f"image shape {image.shape} differs from ground truth {truth.shape}")
     if not (np.all(np.isfinite(image)) and np.all(np.isfinite(truth))):
         raise ValueError("image has NaN or infinite pixels")
+    import colour
+
     return np.asarray(colour.delta_E(rgb_to_lab(image, colourspace), rgb_to_lab(truth, colourspace),
                                      method="CIE 2000"))
 
