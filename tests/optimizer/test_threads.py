@@ -37,7 +37,7 @@ def test_one_and_two_cores_give_the_same_table(tmp_path):
         _, err = p.communicate(timeout=900)
         assert p.returncode == 0, err[-2000:]
     one, two = _rows(tmp_path / "one.csv"), _rows(tmp_path / "two.csv")
-    assert len(one) == 82 and one == two
+    assert len(one) > 2 and one == two  # header + nodes (the auto grid decides how many)
 
 
 def test_pin_respects_the_users_setting(monkeypatch):
