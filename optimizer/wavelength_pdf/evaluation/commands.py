@@ -230,11 +230,13 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
 
     total = evaluation_budget()
     shown = [0.0]
+    # The table's optimization, shown on the same bar: twice a second on a terminal, a
+    # plain line every 30 s elsewhere.
+    every = 0.5 if sys.stderr.isatty() else 30.0
 
     def optimizing(step: int, J: float) -> None:
-        # The table's optimization, shown on the same bar (at most twice a second).
         now = time.monotonic()
-        if bar is not None and (now - shown[0] > 0.5 or step >= total):
+        if bar is not None and (now - shown[0] > every or step >= total):
             shown[0] = now
             bar.set_postfix_str(f"{outdir.name}: optimizing the table, {min(step, total)}/{total} "
                                 f"evaluations, J {J:.4g}", refresh=True)
