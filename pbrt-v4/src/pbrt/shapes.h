@@ -22,6 +22,16 @@ namespace pbrt {
 
 class ParameterDictionary;
 
+// The largest render-space coordinate a shape (or a camera ray's origin) may have. Embree
+// intersects in single precision, and its triangle test forms a triple product of
+// coordinate differences (the distance along the ray, dot(cross(e1, e2), v0 - o)), so
+// differences of 2e12 stay below 4.8e37 < FLT_MAX (3.4e38): beyond that, hits overflow
+// and the shape silently disappears. Bigger coordinates are an error, not a lost object.
+constexpr Float kMaxRenderCoordinate = 1e12f;
+
+// True when every coordinate of p is finite and within kMaxRenderCoordinate.
+bool WithinRenderRange(const Point3f &p);
+
 struct TriangleMesh {
     std::vector<Point3f> p;
     std::vector<Normal3f> n;    // empty or one per vertex
