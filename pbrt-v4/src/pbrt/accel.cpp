@@ -247,10 +247,12 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
     Float t = rh.ray.tfar;
     if (rec.kind == Record::Kind::Mesh) {
         obj->meshes[rec.index]->Interaction(rh.hit.primID, rh.hit.u, rh.hit.v, si);
+        si->shapeLoc = &obj->meshes[rec.index]->loc;
     } else {
         const Sphere &s = *obj->spheres[rec.index];
         Ray local = xf ? Inverse(*xf).ApplyRay(ray) : ray;
         s.Interaction(s.objectFromRender.ApplyPoint(local(t)), si);
+        si->shapeLoc = &s.loc;
     }
     if (xf) {
         // Instance space to world space.

@@ -299,3 +299,29 @@ TEST(Robustness, PlySeedsAndRegressionsReadOrFailCleanly) {
         }
     }
 }
+
+TEST(Robustness, NonFiniteRadianceWarningNamesTheShapeStatement) {
+    // An emitter whose radiance overflows float: the samples that see it become 0 and the
+    // warning names the Shape statement the camera rays hit.
+    const std::string text = R"(LookAt 0 0 -5  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 30 ]
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ]
+Sampler "independent" "integer pixelsamples" [ 2 ]
+WorldBegin
+AreaLightSource "diffuse" "rgb L" [ 1e30 1e30 1e30 ] "float scale" [ 1e30 ]
+
+  Shape "sphere" "float radius" [ 1.25 ]
+)";
+    RenderOptions opts;
+    opts.quiet = true;
+    std::unique_ptr<pbrt::Scene> scene = LoadSceneFromString(text, opts, "nonfinite.pbrt");
+    ::testing::internal::CaptureStderr();
+    Render(*scene, 1, true);
+    std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("nonfinite.pbrt:8:3: paths whose camera ray first hits this shape returned a "
+                       "non-finite radiance value"),
+              std::string::npos)
+        << err;
+    Image img = scene->film->GetImage();
+    for (float v : img.pixels) EXPECT_TRUE(std::isfinite(v));
+}

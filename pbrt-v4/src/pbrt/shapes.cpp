@@ -128,6 +128,7 @@ std::shared_ptr<TriangleMesh> MakeTriangleMesh(const Transform &renderFromObject
     auto mesh = std::make_shared<TriangleMesh>();
     mesh->reverseOrientation = reverseOrientation;
     mesh->transformSwapsHandedness = renderFromObject.SwapsHandedness();
+    mesh->loc = loc;
     mesh->p.reserve(P.size());
     for (auto &q : P) {
         Point3f w = renderFromObject.ApplyPoint(Point3f(q[0], q[1], q[2]));
@@ -345,6 +346,7 @@ ShapeSet CreateShapes(const std::string &name, const ParameterDictionary &params
                                          "ray tracer can intersect (it would vanish from the "
                                          "image)");
         }
+        s.loc = loc;
         set.spheres.push_back(s);
     } else {
         throw PbrtError(loc, "Shape \"" + name +

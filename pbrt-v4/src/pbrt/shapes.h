@@ -39,6 +39,7 @@ struct TriangleMesh {
     std::vector<uint32_t> indices;  // three per triangle
     std::vector<int> faceIndices;   // empty or one per triangle
     bool reverseOrientation = false, transformSwapsHandedness = false;
+    FileLoc loc;  // the Shape statement (for messages)
 
     size_t NumTriangles() const { return indices.size() / 3; }
     std::array<Point3f, 3> Vertices(size_t tri) const {
@@ -57,6 +58,7 @@ struct Sphere {
     Transform renderFromObject, objectFromRender;
     Float radius = 1, zMin = -1, zMax = 1, thetaZMin = 0, thetaZMax = 0, phiMax = 2 * Pi;
     bool reverseOrientation = false;
+    FileLoc loc;  // the Shape statement (for messages)
 
     Sphere() = default;
     Sphere(const Transform &renderFromObject, bool reverseOrientation, Float radius, Float zMin,
