@@ -78,6 +78,8 @@ def output_paths(spectra: Sequence[Spectrum], out: str) -> list[Path]:
     (a scene with several emitters): ``out`` is a directory (existing, or ending in '/') that
     gets ``<name>.csv`` each, or a pattern with ``{name}`` and/or ``{index}``.
     """
+    if not out.strip():
+        raise BadInput("-o: empty output path")
     pattern = "{name}" in out or "{index}" in out
     is_dir = Path(out).is_dir() or out.endswith(("/", os.sep))
     if len(spectra) == 1 and not pattern:
@@ -435,6 +437,28 @@ class _Formatter(argparse.HelpFormatter):
                              subsequent_indent=indent, break_on_hyphens=False)
 
 
+def _positive_seconds(text: str) -> float:
+    """``--max-seconds``: a finite number of seconds > 0 (not 0, negative, nan or inf)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds > 0, got {text!r}")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    """``--jobs``: an integer >= 1."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {text!r}")
+    return v
+
+
 def _range_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--range", nargs=2, type=float, metavar=("LO", "HI"),
                         default=(380.0, 780.0),
@@ -461,7 +485,7 @@ def _solver_args(parser: argparse.ArgumentParser, names: list[str]) -> None:
     parser.add_argument("--seed", type=int, default=0, metavar="N",
                         help="random seed; same input and seed give the same table "
                              "(default: 0)")
-    parser.add_argument("--max-seconds", type=float, default=None, metavar="S",
+    parser.add_argument("--max-seconds", type=_positive_seconds, default=None, metavar="S",
                         help="cap on the solver's wall time per spectrum, seconds; the "
                              "best table found so far is kept (default: the solver's own "
                              "evaluation budget, which keeps results reproducible)")
@@ -509,7 +533,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("folder", metavar="FOLDER", help="folder of spectrum files")
     b.add_argument("-o", "--output", required=True, metavar="OUTDIR",
                    help="output folder for the tables and summary.csv")
-    b.add_argument("--jobs", "-j", type=int, default=1, metavar="N",
+    b.add_argument("--jobs", "-j", type=_positive_int, default=1, metavar="N",
                    help="parallel worker processes, one XLA thread each (default: 1)")
     b.add_argument("--force", action="store_true",
                    help="redo every spectrum, even where a newer table exists")
