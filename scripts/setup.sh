@@ -14,6 +14,9 @@ APT_PACKAGES=(
   python3 python3-venv python3-dev
   libembree-dev libtbb-dev libopenexr-dev libgtest-dev libstb-dev
   coinor-libipopt-dev liblapack-dev libblas-dev
+  # The sanitizer and fuzzing build (scripts/fuzz.sh): clang, and libclang-rt-14-dev for
+  # the ASan/UBSan runtimes and libFuzzer (-fsanitize=fuzzer); ccache for rebuilds.
+  clang libclang-rt-14-dev ccache
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
