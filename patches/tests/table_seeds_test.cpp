@@ -41,7 +41,16 @@ TEST(TableSeeds, SeedsAreValidTables) {
 TEST(TableSeeds, RegressionsReadOrFailWithTheirName) {
     for (const fs::path &f : FilesIn(std::string(WT_FUZZ_DIR) + "/regressions/table")) {
         try {
-            wt::LoadTable(f.string());
+            wt::Table t = wt::LoadTable(f.string());
+            // As table_fuzz checks: the four samples of any u lie on the grid's range.
+            for (double u : {0.0, 0.25, 0.5, 0.999999}) {
+                double lambda[wt::kNumDensities], pdf[wt::kNumDensities];
+                wt::SampleFour(t, u, lambda, pdf);
+                for (int k = 0; k < wt::kNumDensities; ++k) {
+                    EXPECT_GE(lambda[k], t.grid.front()) << f << " u=" << u << " k=" << k;
+                    EXPECT_LE(lambda[k], t.grid.back()) << f << " u=" << u << " k=" << k;
+                }
+            }
         } catch (const wt::TableError &e) {
             EXPECT_EQ(std::string(e.what()).rfind(f.string(), 0), 0u) << e.what();
         }
