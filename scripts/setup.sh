@@ -15,6 +15,9 @@ APT_PACKAGES=(
   libembree-dev libtbb-dev libopenexr-dev libgtest-dev libstb-dev
   coinor-libipopt-dev liblapack-dev libblas-dev
   libllvm19  # Mitsuba 3.9's llvm variants need LLVM >= 15 (wavelength_pdf.mitsuba finds it)
+  # The sanitizer and fuzzing build (scripts/fuzz.sh): clang, and libclang-rt-14-dev for
+  # the ASan/UBSan runtimes and libFuzzer (-fsanitize=fuzzer); ccache for rebuilds.
+  clang libclang-rt-14-dev ccache
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -22,6 +22,44 @@ from wavelength_pdf.result import Result, read_header  # noqa: F401  (read_heade
 from wavelength_pdf.table import write_table
 
 
+class OutputPathError(ValueError):
+    """An output file that cannot be written; the message reads ``PATH: reason``."""
+
+
+def check_output_path(path: Path) -> None:
+    """Fail now, not after a long optimization, when ``path`` cannot be written.
+
+    The file must have a name, must not be a directory, and its directory (created later if
+    missing) must be one where a file can be created: the check creates and removes a
+    temporary file there, since permission bits do not tell (root, /proc, read-only mounts).
+
+    Raises
+    ------
+    OutputPathError
+        Naming the path and the reason.
+    """
+    import os
+    import tempfile
+
+    p = Path(path)
+    if str(path) == "" or p.name == "":
+        raise OutputPathError(f"{str(path)!r}: empty output file name")
+    if p.is_dir():
+        raise OutputPathError(f"{p}: is a directory, not a file name")
+    ancestor = p.parent if str(p.parent) else Path(".")
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise OutputPathError(f"{p}: {ancestor} is not a directory")
+    # The directory, or the nearest existing one above it where the missing ones will go.
+    try:
+        fd, probe = tempfile.mkstemp(dir=ancestor, prefix=".wavelength-pdf-probe-")
+    except OSError as e:
+        raise OutputPathError(f"{p}: cannot create a file in {ancestor} ({e.strerror})") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
 class GridError(ValueError):
     """A table grid that cannot be built from the given range and step."""
 
@@ -83,8 +121,15 @@ def optimize_one(spectrum: Spectrum, path: Path, grid: np.ndarray | str, solver:
                  seed: int, max_seconds: float | None, progress: Callable | None,
                  colour_bar: Path | None = None, plot: Path | None = None,
                  max_evals: int | None = None) -> Outcome:
-    """Optimize one spectrum; write its table (only if accepted) and the optional images."""
+    """Optimize one spectrum; write its table (only if accepted) and the optional images.
+
+    Every output path is checked first (:func:`check_output_path`), before the optimization.
+    """
     from wavelength_pdf.optimize import optimize_spectrum
+
+    for out in (path, colour_bar, plot):
+        if out is not None:
+            check_output_path(out)
 
     kwargs: dict[str, Any] = {"grid": grid, "seed": seed, "progress": progress,
                               "max_seconds": max_seconds}

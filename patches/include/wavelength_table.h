@@ -151,7 +151,10 @@ WAVELENGTH_TABLE_HOST_DEVICE inline double SampleSegment(const double *grid, con
     const double den = q + std::sqrt(q * q + 2.0 * a * r);
     double t = den > 0.0 ? 2.0 * r / den : 0.0;
     t = t > h ? h : t;
-    return fromLeft ? grid[i] + t : grid[i + 1] - t;
+    // Inside the segment even where the arithmetic is lost to rounding (densities near the
+    // smallest doubles, on a grid spanning 1e308 nm, once gave 0 nm): a no-op otherwise.
+    const double x = fromLeft ? grid[i] + t : grid[i + 1] - t;
+    return x < grid[i] ? grid[i] : (x > grid[i + 1] ? grid[i + 1] : x);
 }
 
 // lambda = F^-1(u), exact for the piecewise-linear density.

@@ -19,13 +19,28 @@ target_link_libraries(rgb2spec_opt PRIVATE Threads::Threads)
 # changes no result.
 target_compile_options(rgb2spec_opt PRIVATE -O3 -fno-math-errno)
 
+#
+# A second build directory (the sanitizer and fuzzing build, scripts/fuzz.sh) can take the
+# tables of a first one instead of computing them again: -DPBRT_RGB2SPEC_FROM=<that
+# build directory> copies its rgbspectrum_<space>.cpp.
+set(PBRT_RGB2SPEC_FROM "" CACHE PATH "Build directory whose RGB-to-spectrum tables to copy instead of computing them")
 foreach(_space srgb dci-p3 rec2020 aces2065-1)
   set(_out ${CMAKE_BINARY_DIR}/rgbspectrum_${_space}.cpp)
-  add_custom_command(
-    OUTPUT ${_out}
-    COMMAND rgb2spec_opt ${_space} ${_out}
-    DEPENDS rgb2spec_opt
-    COMMENT "Computing the RGB-to-spectrum table for ${_space}"
-    VERBATIM)
+  set(_from ${PBRT_RGB2SPEC_FROM}/rgbspectrum_${_space}.cpp)
+  if(PBRT_RGB2SPEC_FROM AND EXISTS ${_from})
+    add_custom_command(
+      OUTPUT ${_out}
+      COMMAND ${CMAKE_COMMAND} -E copy ${_from} ${_out}
+      DEPENDS ${_from}
+      COMMENT "Copying the RGB-to-spectrum table for ${_space} from ${PBRT_RGB2SPEC_FROM}"
+      VERBATIM)
+  else()
+    add_custom_command(
+      OUTPUT ${_out}
+      COMMAND rgb2spec_opt ${_space} ${_out}
+      DEPENDS rgb2spec_opt
+      COMMENT "Computing the RGB-to-spectrum table for ${_space}"
+      VERBATIM)
+  endif()
   list(APPEND PBRT_GENERATED_SOURCES ${_out})
 endforeach()

@@ -22,6 +22,7 @@ and exits with status 1.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import Sequence
 
@@ -106,18 +107,29 @@ def solver_args(parser: argparse.ArgumentParser, names: list[str]) -> None:
     parser.add_argument("--seed", type=int, default=0, metavar="N",
                         help="random seed; same input and seed give the same table "
                              "(default: 0)")
-    parser.add_argument("--max-seconds", type=float, default=None, metavar="S",
+    parser.add_argument("--max-seconds", type=positive_seconds, default=None, metavar="S",
                         help="cap on the solver's wall time per spectrum, seconds; the "
                              "best table found so far is kept (default: the solver's own "
                              "evaluation budget, which keeps results reproducible)")
-    parser.add_argument("--max-evals", type=_positive_int, default=None, metavar="N",
+    parser.add_argument("--max-evals", type=positive_int, default=None, metavar="N",
                         help="the solver's evaluation budget per spectrum (default: the "
                              "solver's own); same input, seed and budget give the same table")
     parser.add_argument("--quiet", "-q", action="store_true",
                         help="no progress bar (the one-line summary is still printed)")
 
 
-def _positive_int(text: str) -> int:
+def positive_seconds(text: str) -> float:
+    """``--max-seconds``: a finite number of seconds > 0 (not 0, negative, nan or inf)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds > 0, got {text!r}")
+    return v
+
+
+def positive_int(text: str) -> int:
     try:
         n = int(text)
     except ValueError:

@@ -5,7 +5,7 @@ import argparse
 import sys
 from typing import Any
 
-from wavelength_pdf.cli import (EXIT_BAD_INPUT, EXIT_NOT_ACCEPTED, PROG, BadInput, Formatter,
+from wavelength_pdf.cli import (positive_int, EXIT_BAD_INPUT, EXIT_NOT_ACCEPTED, PROG, BadInput, Formatter,
                                 check_solver, range_args, solver_args)
 from wavelength_pdf.produce import make_grid
 
@@ -69,7 +69,7 @@ def add_parser(sub, names: list[str]) -> None:
     b.add_argument("folder", metavar="FOLDER", help="folder of spectrum files")
     b.add_argument("-o", "--output", required=True, metavar="OUTDIR",
                    help="output folder for the tables and summary.csv")
-    b.add_argument("--jobs", "-j", type=int, default=1, metavar="N",
+    b.add_argument("--jobs", "-j", type=positive_int, default=1, metavar="N",
                    help="parallel worker processes (default: 1); the tables are the same "
                         "as with one")
     b.add_argument("--force", action="store_true",

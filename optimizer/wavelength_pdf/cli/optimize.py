@@ -21,6 +21,8 @@ def output_paths(spectra: Sequence[Spectrum], out: str) -> list[Path]:
     (a scene with several emitters): ``out`` is a directory (existing, or ending in '/') that
     gets ``<name>.csv`` each, or a pattern with ``{name}`` and/or ``{index}``.
     """
+    if not out.strip():
+        raise BadInput("-o: empty output path")
     pattern = "{name}" in out or "{index}" in out
     is_dir = Path(out).is_dir() or out.endswith(("/", os.sep))
     if len(spectra) == 1 and not pattern:

@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -196,7 +197,28 @@ void Accelerator::Commit() {
         bounds = Bounds3f(Point3f(b.lower_x, b.lower_y, b.lower_z), Point3f(b.upper_x, b.upper_y, b.upper_z));
 }
 
+namespace {
+// Embree's limit on ray origins and directions (FLT_LARGE in its RayK::valid(), which
+// aborts on a ray outside it): beyond, or NaN, the ray is dropped here instead.
+constexpr Float kEmbreeLargest = 1.844e18f;
+
+bool EmbreeAccepts(const Ray &r) {
+    for (Float c : {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z})
+        if (!(std::abs(c) <= kEmbreeLargest)) return false;
+    return r.tMax >= 0;  // also false for NaN
+}
+
+void WarnDroppedRay() {
+    Warning("a ray with a non-finite or huge origin or direction was dropped (not traced); "
+            "the scene has geometry or lights beyond the ray tracer's range");
+}
+}  // namespace
+
 bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
+    if (!EmbreeAccepts(ray)) {
+        WarnDroppedRay();
+        return false;
+    }
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
@@ -225,10 +247,12 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
     Float t = rh.ray.tfar;
     if (rec.kind == Record::Kind::Mesh) {
         obj->meshes[rec.index]->Interaction(rh.hit.primID, rh.hit.u, rh.hit.v, si);
+        si->shapeLoc = &obj->meshes[rec.index]->loc;
     } else {
         const Sphere &s = *obj->spheres[rec.index];
         Ray local = xf ? Inverse(*xf).ApplyRay(ray) : ray;
         s.Interaction(s.objectFromRender.ApplyPoint(local(t)), si);
+        si->shapeLoc = &s.loc;
     }
     if (xf) {
         // Instance space to world space.
@@ -254,6 +278,10 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
 }
 
 bool Accelerator::Occluded(const Ray &ray) const {
+    if (!EmbreeAccepts(ray)) {
+        WarnDroppedRay();
+        return true;
+    }
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay r;

@@ -1,7 +1,10 @@
 #include <pbrt/cameras.h>
 
 #include <pbrt/util/paramdict.h>
+#include <pbrt/shapes.h>
 #include <pbrt/util/sampling.h>
+
+#include <cmath>
 
 namespace pbrt {
 
@@ -52,6 +55,9 @@ Camera Camera::Create(const std::string &name, const ParameterDictionary &params
             throw PbrtError(params.Loc("screenwindow"),
                             "\"screenwindow\" needs four values xmin xmax ymin ymax with min < max");
         for (int i = 0; i < 4; ++i) screen[i] = sw[i];
+        if (!std::isfinite(screen[1] - screen[0]) || !std::isfinite(screen[3] - screen[2]))
+            throw PbrtError(params.Loc("screenwindow"),
+                            "\"screenwindow\" is too large (its width or height overflows)");
     }
 
     Float fov = 90;
@@ -86,6 +92,34 @@ Ray Camera::GenerateRay(Point2f pFilm, Point2f uLens) const {
     w.d = Normalize(w.d);
     w.tMax = Infinity;
     return w;
+}
+
+void Camera::CheckRays(Vector2f filterRadius, const FileLoc &loc) const {
+    const SquareMatrix4 &m = worldFromCamera.Matrix();
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            if (!std::isfinite(m.m[i][j]))
+                throw PbrtError(loc, "the camera transformation is not finite (its inverse "
+                                     "overflows: is the CTM at the Camera statement singular "
+                                     "or huge?)");
+    // Rays are affine in the film position (before normalization), so the extremes of the
+    // film and the lens bound every ray's magnitude.
+    const Float xs[] = {-filterRadius.x, Float(resolution.x) / 2, resolution.x + filterRadius.x};
+    const Float ys[] = {-filterRadius.y, Float(resolution.y) / 2, resolution.y + filterRadius.y};
+    const Point2f lens[] = {{0.5f, 0.5f}, {0, 0}, {1, 1}, {0, 1}, {1, 0}};
+    for (Float x : xs)
+        for (Float y : ys)
+            for (const Point2f &u : lens) {
+                Ray r = GenerateRay(Point2f(x, y), u);
+                bool ok = std::isfinite(r.d.x) && std::isfinite(r.d.y) && std::isfinite(r.d.z) &&
+                          LengthSquared(r.d) > 0 && WithinRenderRange(r.o);
+                if (!ok)
+                    throw PbrtError(loc, "camera rays at film position (" + std::to_string(x) +
+                                             ", " + std::to_string(y) +
+                                             ") are not finite or start beyond +-1e12: the "
+                                             "camera transformation, screen window, lens or "
+                                             "pixel filter radius is too large");
+            }
 }
 
 std::string Camera::Description() const {

@@ -42,6 +42,11 @@ class Camera {
     const Transform &WorldFromCamera() const { return worldFromCamera; }
     Float ExposureTime() const { return shutterClose - shutterOpen; }
     std::string Description() const;
+    // Throws PbrtError(loc) unless every camera ray is one the ray tracer can trace: film
+    // positions up to filterRadius pixels beyond the film's edges, any lens position, must
+    // give a finite, non-zero direction and an origin within kMaxRenderCoordinate (a huge
+    // camera transform, screen window or filter radius would overflow).
+    void CheckRays(Vector2f filterRadius, const FileLoc &loc) const;
 
   private:
     Type type;

@@ -3,8 +3,36 @@
 #include <pbrt/util/paramdict.h>
 
 #include <cmath>
+#include <cstdio>
+
+#include <unistd.h>
 
 namespace pbrt {
+
+namespace {
+
+// Bytes a film pixel costs while rendering and writing: the accumulator (four doubles) and
+// the output image's three floats.
+constexpr int kFilmBytesPerPixel = 4 * sizeof(double) + 3 * sizeof(float);
+
+double PhysicalMemoryBytes() {
+    long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && pageSize > 0 ? double(pages) * double(pageSize) : 0;
+}
+
+std::string FormatGB(double bytes) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.3g GB", bytes / 1e9);
+    return buf;
+}
+
+std::string FormatCount(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.4g", v);
+    return buf;
+}
+
+}  // namespace
 
 FilmSettings FilmSettings::Create(const std::string &type, const ParameterDictionary &params,
                                   const RGBColorSpace *colorSpace, Point2i resOverride,
@@ -23,9 +51,22 @@ FilmSettings FilmSettings::Create(const std::string &type, const ParameterDictio
     s.fullResolution = fileRes;
     if (resOverride.x > 0) s.fullResolution = resOverride;
     if (resScale != 1) {
-        s.fullResolution.x = std::max(1, int(std::lround(s.fullResolution.x * resScale)));
-        s.fullResolution.y = std::max(1, int(std::lround(s.fullResolution.y * resScale)));
+        // In double: a scale of 1e9 must be refused, not wrapped around to a 1x1 image.
+        double w = std::round(double(s.fullResolution.x) * resScale);
+        double h = std::round(double(s.fullResolution.y) * resScale);
+        if (!(w <= kMaxFilmSide && h <= kMaxFilmSide))
+            throw PbrtError(loc, "the resolution " + std::to_string(s.fullResolution.x) + "x" +
+                                     std::to_string(s.fullResolution.y) + " scaled by " +
+                                     std::to_string(resScale) + " is " + FormatCount(w) + "x" +
+                                     FormatCount(h) + " pixels, more than " +
+                                     std::to_string(kMaxFilmSide) + " per side");
+        if (w < 1 || h < 1)
+            Warning(loc, "the resolution scale " + std::to_string(resScale) +
+                             " makes the film smaller than one pixel; rendering one pixel");
+        s.fullResolution.x = std::max(1, int(w));
+        s.fullResolution.y = std::max(1, int(h));
     }
+
     s.filename = params.GetOneString("filename", "pbrt.exr");
 
     // Pixel bounds from "cropwindow" (fractions) or "pixelbounds" (pixels of the file's
@@ -52,6 +93,17 @@ FilmSettings FilmSettings::Create(const std::string &type, const ParameterDictio
         s.pixelBounds.pMax.y = Clamp(s.pixelBounds.pMax.y, 0, s.fullResolution.y);
     }
     if (s.pixelBounds.Empty()) throw PbrtError(loc, "the film's crop window / pixel bounds are empty");
+
+    // Refuse a film that cannot fit in memory before allocating it, with the size it needs.
+    double bytes = double(s.pixelBounds.Area()) * kFilmBytesPerPixel;
+    double available = PhysicalMemoryBytes();
+    if (available > 0 && bytes > available)
+        throw PbrtError(loc, "a " + std::to_string(s.pixelBounds.Width()) + "x" +
+                                 std::to_string(s.pixelBounds.Height()) + " film needs " +
+                                 FormatGB(bytes) + " of memory (" +
+                                 std::to_string(kFilmBytesPerPixel) +
+                                 " bytes per pixel), more than this machine's " +
+                                 FormatGB(available));
 
     // Sensor: only pbrt-v4's default "cie1931" without white balancing.
     std::string sensor = params.GetOneString("sensor", "cie1931");

@@ -23,6 +23,10 @@ namespace pbrt {
 
 class ParameterDictionary;
 
+// The largest film side in pixels: pixel coordinates are ints. (Films far smaller are
+// refused too when they cannot fit in memory.)
+constexpr int kMaxFilmSide = std::numeric_limits<int>::max();
+
 struct FilmSettings {
     Point2i fullResolution{1280, 720};
     Bounds2i pixelBounds{{0, 0}, {1280, 720}};

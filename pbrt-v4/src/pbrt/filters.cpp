@@ -3,12 +3,21 @@
 #include <pbrt/util/paramdict.h>
 #include <pbrt/util/sampling.h>
 
+#include <cmath>
+
 namespace pbrt {
 
 Filter::Filter(Type type, Vector2f radius, Float sigma) : type(type), radius(radius), sigma(sigma) {
     if (!(radius.x > 0) || !(radius.y > 0))
         throw PbrtError("filter radius must be positive");
     if (type == Type::Gaussian && !(sigma > 0)) throw PbrtError("gaussian filter sigma must be positive");
+    // Each sample's weight is the filter's integral (see Sample): it must be a finite number.
+    Float integral = Integral();
+    if (!std::isfinite(radius.x) || !std::isfinite(radius.y) || !std::isfinite(integral) ||
+        !(integral > 0))
+        throw PbrtError("filter radius " + std::to_string(radius.x) + " x " +
+                        std::to_string(radius.y) + " is too large (the filter's integral, " +
+                        "every sample's weight, overflows)");
 }
 
 Filter Filter::Create(const std::string &name, const ParameterDictionary &params,

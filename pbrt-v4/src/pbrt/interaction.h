@@ -1,6 +1,7 @@
 // A ray's hit on a surface, in world space, and how new rays leave it.
 #pragma once
 
+#include <pbrt/pbrt.h>
 #include <pbrt/ray.h>
 #include <pbrt/util/vecmath.h>
 
@@ -21,6 +22,7 @@ struct SurfaceInteraction {
     int material = -1;  // index into Scene::materials; -1: "interface" (no surface)
     int areaLight = -1; // index into Scene::lights of the emitter on this surface, or -1
     int faceIndex = 0;
+    const FileLoc *shapeLoc = nullptr;  // the Shape statement of the surface hit (for messages)
 
     // The ray origin offset off the surface, to the side of w, so a new ray does not hit the
     // surface it starts on.

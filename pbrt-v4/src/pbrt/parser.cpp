@@ -53,7 +53,10 @@ std::string ReadSceneFile(const std::string &path, const FileLoc *from) {
     };
     if (HasSuffix(path, ".gz"))
         throw fail("gzip-compressed scene files are not supported; decompress it first");
-    if (!IsRegularFile(path)) throw fail("no such scene file");
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw fail("is a directory, not a scene file");
+    if (!std::filesystem::exists(path, ec)) throw fail("no such scene file");
+    if (!IsRegularFile(path)) throw fail("not a regular file");
     // One read of the whole file (far faster than a character iterator on big meshes).
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw fail("cannot open scene file");

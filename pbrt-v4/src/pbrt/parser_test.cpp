@@ -445,7 +445,7 @@ TEST(Parser, MalformedInputNamesFileLineAndColumn) {
         {"\"Shape\"", "bad.pbrt:1:1", "expected a directive, got the string"},
         {"[ Shape ]", "bad.pbrt:1:1", "mismatched brackets"},
         {"WorldBegin\nInclude \"no-such-file.pbrt\"", "bad.pbrt:2:1", "no-such-file.pbrt"},
-        {"Include \"/\"", "bad.pbrt:1:1", "no such scene file"},
+        {"Include \"/\"", "bad.pbrt:1:1", "is a directory, not a scene file"},
         {"Include \"x.pbrt.gz\"", "bad.pbrt:1:1", "gzip"},
     };
     for (const Case &c : cases) {

@@ -1,12 +1,20 @@
 #include <pbrt/pbrt.h>
 
+#include <atomic>
 #include <cstdio>
 #include <mutex>
 #include <set>
 
 namespace pbrt {
 
+namespace {
+std::atomic<bool> warningsSuppressed{false};
+}  // namespace
+
+void SuppressWarnings(bool suppress) { warningsSuppressed = suppress; }
+
 void Warning(const std::string &msg) {
+    if (warningsSuppressed) return;
     // Each distinct warning is printed once, however many threads or pixels hit it.
     static std::mutex mutex;
     static std::set<std::string> seen;

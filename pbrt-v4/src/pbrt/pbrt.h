@@ -41,5 +41,8 @@ class PbrtError : public std::runtime_error {
 // Prints a warning to stderr ("pbrt: warning: ..."), once per distinct message.
 void Warning(const std::string &msg);
 void Warning(const FileLoc &loc, const std::string &msg);
+// Drops every warning from now on (true) or prints them again (false): for fuzzing, where
+// millions of distinct warnings would fill stderr and the set of messages already printed.
+void SuppressWarnings(bool suppress);
 
 }  // namespace pbrt

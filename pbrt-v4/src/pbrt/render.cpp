@@ -9,6 +9,7 @@
 
 #include <sys/resource.h>
 
+#include <cmath>
 #include <memory>
 
 namespace pbrt {
@@ -33,6 +34,28 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     }
     return m;
 }
+
+namespace {
+
+bool IsFinite(const SampledSpectrum &L) {
+    for (int i = 0; i < NSpectrumSamples; ++i)
+        if (!std::isfinite(L[i])) return false;
+    return true;
+}
+
+// Names the scene statement of the first surface the camera ray hits, so that the user can
+// find what produces the NaN or infinity (once per statement: Warning drops repeats).
+void WarnNonFinite(const Scene &scene, const Ray &cameraRay) {
+    SurfaceInteraction si;
+    if (scene.accel->Intersect(cameraRay, &si) && si.shapeLoc && !si.shapeLoc->filename.empty())
+        Warning(*si.shapeLoc, "paths whose camera ray first hits this shape returned a "
+                              "non-finite radiance value; those samples were replaced by 0");
+    else
+        Warning("paths that first hit no shape (lights at infinity) returned a non-finite "
+                "radiance value; those samples were replaced by 0");
+}
+
+}  // namespace
 
 RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
     std::unique_ptr<tbb::global_control> limit;
@@ -71,6 +94,10 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
                         Point2f uLens = sampler.Get2D();
                         Ray ray = scene.camera->GenerateRay(pFilm, uLens);
                         SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth);
+                        if (!IsFinite(L)) {
+                            WarnNonFinite(scene, ray);
+                            L = SampledSpectrum(0);
+                        }
                         film.AddSample(p, film.ToRGB(L, lambda), fs.weight);
                     }
                 }

@@ -2,6 +2,7 @@
 
 #include <pbrt/parser.h>
 #include <pbrt/util/color.h>
+#include <pbrt/util/output_path.h>
 #include <pbrt/util/paramdict.h>
 #include <pbrt/wavelength_coverage.h>
 
@@ -176,6 +177,7 @@ class SceneBuilder : public ParserTarget {
         RequireOptionsBlock("PixelFilter", loc);
         ParameterDictionary dict(std::move(params));
         scene->filter = Filter::Create(name, dict, loc);
+        filterLoc = loc;
         CheckUnused(dict, "PixelFilter \"" + name + "\"");
     }
     void Film(const std::string &type, ParsedParameterVector params, FileLoc loc) override {
@@ -370,6 +372,7 @@ class SceneBuilder : public ParserTarget {
     bool inWorld = false;
     std::optional<long long> optionSeed;
     pbrt::Transform cameraFromWorld;
+    FileLoc filterLoc;
     std::optional<Desc> filmDesc, samplerDesc, integratorDesc, cameraDesc;
 };
 
@@ -569,12 +572,23 @@ void SceneBuilder::EndOfFiles() {
     FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
                                            opts.resolution, opts.resolutionScale, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
+    if (opts.outfile.empty()) {
+        try {
+            CheckOutputImagePath(fs.filename);
+        } catch (const PbrtError &e) {
+            throw PbrtError(filmDict.Find("filename") ? filmDict.Loc("filename") : film.loc,
+                            std::string("Film \"filename\": ") + e.what());
+        }
+    }
 
     Desc cam = cameraDesc ? *cameraDesc : Desc{"perspective", {}, FileLoc{}, nullptr};
     ParameterDictionary camDict(cam.params);
     scene->camera = std::make_unique<pbrt::Camera>(
         pbrt::Camera::Create(cam.name, camDict, cameraFromWorld, fs.fullResolution, cam.loc));
     CheckUnused(camDict, "Camera \"" + cam.name + "\"");
+    // No non-finite camera ray may reach the ray tracer: checked here, before rendering.
+    // (At the Camera statement; at the PixelFilter's when the scene has no Camera.)
+    scene->camera->CheckRays(scene->filter.Radius(), cameraDesc ? cam.loc : filterLoc);
     scene->film = std::make_unique<RGBFilm>(fs, scene->camera->ExposureTime());
 
     Desc samp = samplerDesc ? *samplerDesc : Desc{"zsobol", {}, FileLoc{}, nullptr};

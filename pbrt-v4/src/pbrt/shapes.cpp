@@ -5,6 +5,7 @@
 #include <pbrt/util/ply.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace pbrt {
 
@@ -12,6 +13,20 @@ namespace {
 // Relative error bound of a reconstructed hit point (Embree's single-precision
 // barycentrics and our interpolation), with a safety factor.
 constexpr Float kPointErrorScale = 2e-6f;
+}  // namespace
+
+bool WithinRenderRange(const Point3f &p) {
+    for (Float c : {p.x, p.y, p.z})
+        if (!(std::abs(c) <= kMaxRenderCoordinate)) return false;  // also false for NaN
+    return true;
+}
+
+namespace {
+std::string PointString(const Point3f &p) {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "(%g, %g, %g)", double(p.x), double(p.y), double(p.z));
+    return buf;
+}
 }  // namespace
 
 // --- Triangle meshes -------------------------------------------------------------------
@@ -113,11 +128,17 @@ std::shared_ptr<TriangleMesh> MakeTriangleMesh(const Transform &renderFromObject
     auto mesh = std::make_shared<TriangleMesh>();
     mesh->reverseOrientation = reverseOrientation;
     mesh->transformSwapsHandedness = renderFromObject.SwapsHandedness();
+    mesh->loc = loc;
     mesh->p.reserve(P.size());
     for (auto &q : P) {
         Point3f w = renderFromObject.ApplyPoint(Point3f(q[0], q[1], q[2]));
         if (!std::isfinite(w.x) || !std::isfinite(w.y) || !std::isfinite(w.z))
             throw PbrtError(loc, "triangle mesh has a vertex that is not finite");
+        if (!WithinRenderRange(w))
+            throw PbrtError(loc, "triangle mesh vertex " + std::to_string(mesh->p.size()) +
+                                     " lies at " + PointString(w) +
+                                     " after its transformation, beyond the +-1e12 the ray "
+                                     "tracer can intersect (it would vanish from the image)");
         mesh->p.push_back(w);
     }
     for (auto &nn : N) {
@@ -291,7 +312,13 @@ ShapeSet CreateShapes(const std::string &name, const ParameterDictionary &params
         if (params.Find("displacement"))
             throw PbrtError(params.Loc("displacement"), "plymesh \"displacement\" is not supported");
         params.GetOneFloat("edgelength", 1);  // only used with displacement
-        PlyMesh ply = ReadPly(ResolveFilename(filename, params.Loc("filename")));
+        // PLY errors name the Shape statement too ("scene.pbrt:12:7: "mesh.ply": ...").
+        PlyMesh ply;
+        try {
+            ply = ReadPly(ResolveFilename(filename, params.Loc("filename")));
+        } catch (const PbrtError &e) {
+            throw PbrtError(params.Loc("filename"), e.what());
+        }
         set.meshes.push_back(MakeTriangleMesh(renderFromObject, reverseOrientation,
                                               std::move(ply.P), std::move(ply.indices),
                                               std::move(ply.N), std::move(ply.uv),
@@ -306,6 +333,20 @@ ShapeSet CreateShapes(const std::string &name, const ParameterDictionary &params
         Sphere s(renderFromObject, reverseOrientation, radius, zmin, zmax, phimax);
         if (!(s.zMax > s.zMin) || !(s.phiMax > 0))
             throw PbrtError(loc, "sphere: empty z or phi range");
+        // The corners of its bounds in render space must be within the ray tracer's range.
+        Bounds3f ob = s.ObjectBounds();
+        for (int c = 0; c < 8; ++c) {
+            Point3f corner((c & 1) ? ob.pMax.x : ob.pMin.x, (c & 2) ? ob.pMax.y : ob.pMin.y,
+                           (c & 4) ? ob.pMax.z : ob.pMin.z);
+            Point3f w = renderFromObject.ApplyPoint(corner);
+            if (!WithinRenderRange(w))
+                throw PbrtError(loc, "sphere of radius " + std::to_string(radius) +
+                                         " reaches " + PointString(w) +
+                                         " after its transformation, beyond the +-1e12 the "
+                                         "ray tracer can intersect (it would vanish from the "
+                                         "image)");
+        }
+        s.loc = loc;
         set.spheres.push_back(s);
     } else {
         throw PbrtError(loc, "Shape \"" + name +

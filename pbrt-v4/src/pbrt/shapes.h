@@ -22,6 +22,16 @@ namespace pbrt {
 
 class ParameterDictionary;
 
+// The largest render-space coordinate a shape (or a camera ray's origin) may have. Embree
+// intersects in single precision, and its triangle test forms a triple product of
+// coordinate differences (the distance along the ray, dot(cross(e1, e2), v0 - o)), so
+// differences of 2e12 stay below 4.8e37 < FLT_MAX (3.4e38): beyond that, hits overflow
+// and the shape silently disappears. Bigger coordinates are an error, not a lost object.
+constexpr Float kMaxRenderCoordinate = 1e12f;
+
+// True when every coordinate of p is finite and within kMaxRenderCoordinate.
+bool WithinRenderRange(const Point3f &p);
+
 struct TriangleMesh {
     std::vector<Point3f> p;
     std::vector<Normal3f> n;    // empty or one per vertex
@@ -29,6 +39,7 @@ struct TriangleMesh {
     std::vector<uint32_t> indices;  // three per triangle
     std::vector<int> faceIndices;   // empty or one per triangle
     bool reverseOrientation = false, transformSwapsHandedness = false;
+    FileLoc loc;  // the Shape statement (for messages)
 
     size_t NumTriangles() const { return indices.size() / 3; }
     std::array<Point3f, 3> Vertices(size_t tri) const {
@@ -47,6 +58,7 @@ struct Sphere {
     Transform renderFromObject, objectFromRender;
     Float radius = 1, zMin = -1, zMax = 1, thetaZMin = 0, thetaZMax = 0, phiMax = 2 * Pi;
     bool reverseOrientation = false;
+    FileLoc loc;  // the Shape statement (for messages)
 
     Sphere() = default;
     Sphere(const Transform &renderFromObject, bool reverseOrientation, Float radius, Float zMin,

@@ -2,6 +2,7 @@
 #include <pbrt/options.h>
 #include <pbrt/render.h>
 #include <pbrt/scene.h>
+#include <pbrt/util/output_path.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -159,12 +160,11 @@ int main(int argc, char **argv) {
         // builder loads it again for the render; reading a table is cheap).
         if (!opts.wavelengthTable.empty())
             WavelengthSampler::FromTable(opts.wavelengthTable, opts.defensiveShare);
+        // Fail before parsing and rendering, not after, when the image cannot be written
+        // there (the scene builder checks the film's "filename" the same way).
+        if (!opts.outfile.empty()) CheckOutputImagePath(opts.outfile);
         std::unique_ptr<Scene> scene = LoadScene(files, opts);
         std::string outfile = opts.outfile.empty() ? scene->film->Settings().filename : opts.outfile;
-        // Fail before rendering, not after, when the image cannot be written there.
-        std::filesystem::path dir = std::filesystem::path(outfile).parent_path();
-        if (!dir.empty() && !std::filesystem::is_directory(dir))
-            throw PbrtError("\"" + outfile + "\": the output directory does not exist");
         const FilmSettings &fs = scene->film->Settings();
         if (!opts.quiet)
             std::fprintf(stderr, "pbrt: %dx%d pixels, %d spp (%s), maxdepth %d, wavelengths: %s\n",

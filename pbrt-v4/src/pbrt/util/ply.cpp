@@ -11,6 +11,7 @@
 #include <utility>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -153,11 +154,21 @@ int VertexSlot(const std::string &n) {
 PlyMesh ReadPly(const std::string &path) {
     auto fail = [&](const std::string &why) { return PbrtError("\"" + path + "\": " + why); };
 
+    // A directory opens as a stream on Linux and reports a nonsense size: refuse it first.
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw fail("is a directory, not a PLY file");
+    if (!std::filesystem::exists(path, ec)) throw fail("no such PLY file");
+    if (!std::filesystem::is_regular_file(path, ec)) throw fail("not a regular file");
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw fail("cannot open PLY file");
     std::string data(size_t(in.tellg()), '\0');
     in.seekg(0);
     if (!in.read(data.data(), std::streamsize(data.size()))) throw fail("error reading PLY file");
+    return ParsePly(data, path);
+}
+
+PlyMesh ParsePly(const std::string &data, const std::string &path) {
+    auto fail = [&](const std::string &why) { return PbrtError("\"" + path + "\": " + why); };
 
     // The header: text lines up to "end_header".
     size_t pos = 0;
@@ -201,9 +212,13 @@ PlyMesh ReadPly(const std::string &path) {
             haveFormat = true;
         } else if (keyword == "element") {
             Element e;
-            long long count = -1;
-            words >> e.name >> count;
-            if (e.name.empty() || !words || count < 0) throw headerError("bad element line");
+            std::string countText, extra;
+            words >> e.name >> countText >> extra;
+            unsigned long long count = 0;
+            auto [end, err] = std::from_chars(countText.data(), countText.data() + countText.size(), count);
+            if (e.name.empty() || countText.empty() || err != std::errc() ||
+                end != countText.data() + countText.size() || !extra.empty())
+                throw headerError("bad element line \"" + line + "\" (expected: element NAME COUNT)");
             e.count = size_t(count);
             elements.push_back(std::move(e));
         } else if (keyword == "property") {
@@ -333,7 +348,9 @@ PlyMesh ReadPly(const std::string &path) {
                 }
             }
         } else {
-            // Elements the renderer does not use (edges, materials, ...) are skipped.
+            // Elements the renderer does not use (edges, materials, ...) are skipped. An
+            // element without properties holds no data, whatever its count says.
+            if (e.properties.empty()) continue;
             for (size_t i = 0; i < e.count; ++i)
                 for (const Property &p : e.properties) {
                     size_t n = p.isList ? body.ReadCount(p.countType) : 1;

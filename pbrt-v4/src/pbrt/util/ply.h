@@ -28,4 +28,7 @@ struct PlyMesh {
 // on a malformed header, truncated data or a vertex index out of range.
 PlyMesh ReadPly(const std::string &path);
 
+// The same for a PLY file's bytes held in memory; `path` names it in error messages.
+PlyMesh ParsePly(const std::string &data, const std::string &path);
+
 }  // namespace pbrt

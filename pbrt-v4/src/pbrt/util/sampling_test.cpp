@@ -48,7 +48,8 @@ void Check2DRoundTrip(Sample sample, Invert invert, const char *what, float tol 
 }  // namespace
 
 TEST(Sampling, LinearTriple) {
-    for (auto [a, b] : {std::pair<Float, Float>{0, 1}, {1, 0}, {0.3f, 2.f}, {1, 1}}) {
+    for (auto ab : {std::pair<Float, Float>{0, 1}, {1, 0}, {0.3f, 2.f}, {1, 1}}) {
+        const Float a = ab.first, b = ab.second;  // (clang 14 cannot capture a structured binding)
         EXPECT_NEAR(Integrate1D([&](double x) { return LinearPDF(Float(x), a, b); }, 0, 1), 1, 1e-4);
         for (Float u = 0.01f; u < 1; u += 0.0437f) {
             Float x = SampleLinear(u, a, b);

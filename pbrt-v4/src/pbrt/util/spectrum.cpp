@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -264,6 +265,9 @@ std::shared_ptr<const PiecewiseLinearSpectrum> PiecewiseLinearSpectrum::FromInte
 
 std::shared_ptr<const PiecewiseLinearSpectrum> PiecewiseLinearSpectrum::ReadSPD(
     const std::string &path, bool normalize) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        throw PbrtError(path + ": is a directory, not a spectrum file");
     std::ifstream in(path);
     if (!in) throw PbrtError(path + ": cannot open spectrum file: " + std::strerror(errno));
     // Read every number, remembering where it came from for error messages.
