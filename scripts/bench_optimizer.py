@@ -16,7 +16,7 @@ The default list: the LSPDD exports in ../shared/spectra/lspdd (skipped when abs
 every illuminant and light source colour-science ships (``colour.SDS_ILLUMINANTS`` as
 ``cie:NAME``, ``colour.SDS_LIGHT_SOURCES`` as ``lamp:NAME``) and synthetic line spectra
 written here (``synthetic:NAME``: Gaussian lines of 0.1-2 nm, laser triplets, lines on a
-weak continuum, a line partly outside the range), and the earlier work's tables
+weak continuum, a line partly outside the range), and the 4 x 81 tables of Dobos 2025
 (../shared/tables/reference-4x81) scored against the same lamps.
 
 Examples::
@@ -49,7 +49,7 @@ LSPDD = SHARED / "spectra" / "lspdd"
 REFERENCE = SHARED / "tables" / "reference-4x81"
 CORNELL = SHARED / "scenes" / "cornell-box" / "scene-v4.pbrt"
 
-#: Earlier work's tables (../shared/tables/reference-4x81) and the spectrum each was made for.
+#: The 4 x 81 tables of Dobos 2025 (../shared/tables/reference-4x81) and the spectrum each was made for.
 REFERENCE_FOR = {
     "fluorescent-ipopt": str(CORNELL),
     "A_Std": "cie:A",
@@ -199,7 +199,7 @@ def run_one(spec: str, tmp: Path, extra: list[str], tables: Path | None) -> dict
 
 
 def score_references(rows: list[dict], tmp: Path) -> None:
-    """J of the earlier work's table for the same lamp, by the project's evaluator."""
+    """J of the Dobos 2025 table for the same lamp, by the project's evaluator."""
     by_spec = {r["spectrum"]: r for r in rows}
     todo = [(ref, spec) for ref, spec in REFERENCE_FOR.items()
             if spec in by_spec and (REFERENCE / f"{ref}.csv").is_file()]
@@ -280,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"accepted {r['accepted']}")
     refs = [r for r in rows if isinstance(r.get("J_reference"), float)]
     if refs:
-        print("earlier work's tables, J / ours: " + ", ".join(
+        print("Dobos 2025 tables, J / ours: " + ", ".join(
             f"{r['reference']} {r['J_reference'] / r['J']:.2f}x" for r in refs if r.get("J")))
     if args.csv:
         with open(args.csv, "w", newline="") as fh:

@@ -7,7 +7,7 @@ optimized for) alternately without a table (pbrt-v4's visible sampling, the defa
 reports in its closing line (paths per CPU-second of the render, scene loading excluded).
 Alternating the runs spreads slow phases of a shared machine over both samplers. It prints
 every run, the median throughput of each sampler and the median of the per-pair ratios
-table / visible; issue 4's target is a cost of at most 2% (ratio >= 0.98).
+table / visible; the target is a cost of at most 2% per path (ratio >= 0.98).
 
 ``--tables A B`` compares two tables instead (A against B, the same way), and
 ``--nodes N`` compares the table with itself refined to N nodes: the same densities
@@ -37,7 +37,7 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 DEFAULT_SCENE = ROOT / "scenes" / "cornell-box" / "scene.pbrt"
 DEFAULT_TABLE = ROOT / "tests" / "data" / "tables" / "tri-band-fluorescent-optimized.csv"
-TARGET_RATIO = 0.98  # issue 4: a table costs at most 2% per path
+TARGET_RATIO = 0.98  # a table may cost at most 2% per path
 
 CLOSING = re.compile(r"rendered in ([0-9.]+) s: (\d+) paths, ([0-9.]+) M paths/s, "
                      r"([0-9.]+) M paths per CPU-second")

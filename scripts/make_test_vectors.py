@@ -1,9 +1,9 @@
-"""Write the cross-language test vectors of the wavelength sampler (issue 4, point 3).
+"""Write the cross-language test vectors of the wavelength sampler (design §8.1).
 
 The Python sampler (``wavelength_pdf.sampling``) is the reference: this script builds a table
 with awkward features, samples it with that module's public functions only, and writes
 
-- ``vectors-table.csv``: the table, in the commented CSV layout of SPEC section 2;
+- ``vectors-table.csv``: the table, in the commented CSV layout of design §2;
 - ``vectors.csv``: one row per u with the four wavelengths lambda_k = F_k^-1(u) [nm] and the
   four mixture densities (1/4) sum_k p_k(lambda_j) [1/nm] that Python computes.
 
@@ -100,7 +100,7 @@ def write_vectors(out_dir: Path) -> tuple[Path, Path]:
 
 
 def _write_table(path: Path, grid: np.ndarray, pdfs: np.ndarray) -> None:
-    """The table in the SPEC 2 layout, through the package's writer when it has one."""
+    """The table in the design §2 layout, through the package's writer when it has one."""
     comments = ["Awkward table for the cross-language sampler tests",
                 "written by scripts/make_test_vectors.py; do not edit by hand"]
     try:

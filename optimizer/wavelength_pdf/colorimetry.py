@@ -1,4 +1,4 @@
-"""Colorimetry of the objective: CIE 1931 2-degree CMFs, XYZ -> CIELAB, CIEDE2000 (SPEC 4).
+"""Colorimetry of the objective: CIE 1931 2-degree CMFs, XYZ -> CIELAB, CIEDE2000 (design §4).
 
 The colour matching functions and the D65 white point come from colour-science. The
 conversion to CIELAB and the CIEDE2000 difference are re-written here in jax.numpy because
@@ -93,7 +93,7 @@ def xyz_to_lab(xyz: Array, white: Array | None = None) -> Array:
     ----------
     xyz : (..., 3) array
     white : (3,) array, optional
-        Reference white XYZ; D65 with Y = 1 by default (SPEC 4).
+        Reference white XYZ; D65 with Y = 1 by default (design §4).
 
     Returns
     -------

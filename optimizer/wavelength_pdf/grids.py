@@ -1,9 +1,9 @@
 """Table grids: the default 5 nm grid, and grids that resolve emission lines of any width.
 
-Densities are piecewise linear on the table grid (SPEC 1), so they cannot follow an
+Densities are piecewise linear on the table grid (design §1), so they cannot follow an
 emission line narrower than a grid step: inside that step f / sum_k p_k varies with the
 line's shape, and C(u) with it. A 0.2 nm laser line on the 5 nm grid stays at ~0.4 x
-stratified uniform J. SPEC 2 allows any increasing grid, so the "auto" grid adds nodes
+stratified uniform J. design §2 allows any increasing grid, so the "auto" grid adds nodes
 where a piecewise-linear function on the grid represents the lamp badly:
 
     error of segment i = integral over the segment of |q - L_i q| / integral of q,

@@ -1,7 +1,8 @@
 """The published method's starting point: an equal-mass partition of the spectrum.
 
-Earlier work on this method (the reference tables in ../shared/tables/reference-4x81 were
-made from it; eq. 15-17 of the paper) starts the optimizer from four densities that split
+The method's publication (Dobos 2025, "Perception-based Optimization of Wavelength Sampling
+Distributions for Spectral Rendering", TU Delft, eq. 15-17; its 4 x 81 tables were made from
+it) starts the optimizer from four densities that split
 the spectrum into four parts of equal mass:
 
     q(lambda) = I(lambda) * (xbar + ybar + zbar)(lambda),      Q = integral of q,
@@ -10,7 +11,7 @@ the spectrum into four parts of equal mass:
 
 Two choices are made here where that description meets a table grid:
 
-- The weight is the spectrum times the *sum* of the three CMFs (as in the earlier work),
+- The weight is the spectrum times the *sum* of the three CMFs (as in Dobos 2025),
   not the luminance alone, so that blue light that Y barely sees still gets samples.
 - A node value is the hat-function average of q over the node's two neighbouring segments
   (restricted to [a_k, a_{k+1}]), not q sampled at the node. For smooth spectra both are

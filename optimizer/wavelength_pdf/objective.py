@@ -1,6 +1,6 @@
-"""The objective J of SPEC section 4, evaluated exactly for one lamp spectrum.
+"""The objective J of design §4, evaluated exactly for one lamp spectrum.
 
-For a table of four densities p_k on the grid lambda_0..lambda_M (SPEC 1) and a path that
+For a table of four densities p_k on the grid lambda_0..lambda_M (design §1) and a path that
 carries the lamp's spectrum I, the estimator of the lamp's colour is
 
     C(u) = sum_j f(lambda_j(u)) / sum_k p_k(lambda_j(u)),   f = I * (xbar, ybar, zbar),

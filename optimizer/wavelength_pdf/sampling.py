@@ -1,4 +1,4 @@
-"""The wavelength sampling model shared by the optimizer and the renderer (SPEC section 1).
+"""The wavelength sampling model shared by the optimizer and the renderer (design §1).
 
 A table holds four densities p_0..p_3 over one strictly increasing grid of nodes
 lambda_0 < ... < lambda_M [nm]. Each density is piecewise *linear* between its node values,
@@ -12,7 +12,7 @@ Every routine comes as a sample / pdf / invert triple. The functions are pure ja
 they are differentiable with respect to the density values (and to u), can be jitted, and
 accept NumPy float64 input (the package enables jax x64).
 
-The baseline "stratified uniform" sampler of SPEC section 4
+The baseline "stratified uniform" sampler of design §4
 (lambda_j = lo + (hi - lo) * ((u + j/4) mod 1)) is not a piecewise-linear table; it is
 given here as its own triple so that every sampler of the project lives in one file.
 """
@@ -244,12 +244,12 @@ def mixture_pdf(grid: Array, P: Array, lam: Array) -> Array:
 def balance_estimate_weights(grid: Array, P: Array, lam: Array) -> Array:
     """1 / sum_k p_k(lam): the factor by which f(lam) is multiplied in the estimator.
 
-    C(u) = sum_j f(lambda_j) * w(lambda_j), w = 1 / sum_k p_k (SPEC section 1).
+    C(u) = sum_j f(lambda_j) * w(lambda_j), w = 1 / sum_k p_k (design §1).
     """
     return 1.0 / (N_DENSITIES * mixture_pdf(grid, P, lam))
 
 
-# --- Stratified uniform sampling (the baseline of SPEC section 4) -------------------------
+# --- Stratified uniform sampling (the baseline of design §4) -------------------------
 
 
 def sample_stratified_uniform(lo: float, hi: float, u: Array) -> Array:

@@ -1,4 +1,4 @@
-"""The emitter spectra a pbrt-v4 scene uses (SPEC 3), one per distinct emitter.
+"""The emitter spectra a pbrt-v4 scene uses (design §3), one per distinct emitter.
 
 ``optimize scene.pbrt`` must produce exactly the tables a scene needs, so this module reads
 the scene's statements (following ``Include`` and ``Import``) and collects every emitter:

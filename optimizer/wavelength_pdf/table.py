@@ -1,7 +1,7 @@
-"""The wavelength-table file (SPEC 2): one reader, one writer.
+"""The wavelength-table file (design §2): one reader, one writer.
 
 A table holds N = 4 densities over one strictly increasing grid of nodes (nm). Each density
-is piecewise linear between nodes and integrates to 1 by the trapezoid rule (SPEC 1).
+is piecewise linear between nodes and integrates to 1 by the trapezoid rule (design §1).
 
 Two layouts are read:
 
@@ -12,7 +12,7 @@ Two layouts are read:
       380,0.00112,0,0,0
       ...
 
-- the headerless "4 x 81" layout of earlier work: four rows of 81 comma-separated densities
+- the headerless "4 x 81" layout in which Dobos 2025 distributed its tables: four rows of 81 comma-separated densities
   at 380, 385, ..., 780 nm (a trailing comma on a row is allowed).
 
 Readers renormalize each density and reject, naming file, line and reason: a NaN, an
@@ -34,9 +34,9 @@ __all__ = ["Table", "TableError", "read_table", "write_table", "normalize", "N_D
 
 from wavelength_pdf.model import N_DENSITIES, RANGE, trapezoid
 
-#: Column header of the CSV layout (SPEC 2).
+#: Column header of the CSV layout (design §2).
 HEADER = "lambda_nm,pdf0,pdf1,pdf2,pdf3"
-#: Grid of the headerless 4 x 81 layout: 380..780 nm in 5 nm steps (SPEC 2).
+#: Grid of the headerless 4 x 81 layout: 380..780 nm in 5 nm steps (design §2).
 GRID_4X81 = np.linspace(RANGE[0], RANGE[1], 81)
 
 
@@ -120,7 +120,7 @@ def _number(token: str, where: str) -> float:
 
 
 def read_table(path: str | os.PathLike) -> Table:
-    """Read a wavelength table in either layout of SPEC 2 and renormalize its densities.
+    """Read a wavelength table in either layout of design §2 and renormalize its densities.
 
     Parameters
     ----------
@@ -159,7 +159,7 @@ def read_table(path: str | os.PathLike) -> Table:
             continue
         fields = [f.strip() for f in line.split(",")]
         if len(fields) > 1 and fields[-1] == "":
-            fields.pop()  # a trailing comma (the 4 x 81 files of earlier work have some)
+            fields.pop()  # a trailing comma (the 4 x 81 files of Dobos 2025 have some)
         if not rows and not header_line and fields and fields[0].lower().startswith("lambda"):
             header_line = lineno
             if len(fields) != 1 + N_DENSITIES:

@@ -1,7 +1,7 @@
 // wavelength_table.h -- sample the wavelengths of a spectral path from a tabulated table.
 //
 // A table holds kNumDensities = 4 densities p_0..p_3 over one strictly increasing grid of
-// nodes lambda_0 < ... < lambda_M [nm] (SPEC section 1). Each p_k is piecewise linear between
+// nodes lambda_0 < ... < lambda_M [nm] (design §1). Each p_k is piecewise linear between
 // its node values, zero outside [lambda_0, lambda_M], and integrates to 1 by the trapezoid
 // rule, so its CDF F_k is piecewise quadratic. A path draws ONE u and gets four wavelengths
 // lambda_k = F_k^-1(u); the estimator divides f(lambda_j) by the mixture density
@@ -13,7 +13,7 @@
 // of the arrays (Pack / ViewPacked; define WAVELENGTH_TABLE_HOST_DEVICE as
 // `__host__ __device__`).
 //
-// File layouts (SPEC section 2), both read by LoadTable / ParseTable:
+// File layouts (design §2), both read by LoadTable / ParseTable:
 //   - commented CSV: lines starting with '#' are comments, then the header
 //     `lambda_nm,pdf0,pdf1,pdf2,pdf3`, then one row per node;
 //   - headerless "4 x 81": four rows of 81 densities at 380, 385, ..., 780 nm.
@@ -49,11 +49,11 @@
 
 namespace wavelength_table {
 
-// Number of densities in a table = wavelengths per path (SPEC section 1).
+// Number of densities in a table = wavelengths per path (design §1).
 constexpr int kNumDensities = 4;
-// Column header of the commented CSV layout (SPEC section 2).
+// Column header of the commented CSV layout (design §2).
 constexpr const char *kHeader = "lambda_nm,pdf0,pdf1,pdf2,pdf3";
-// Grid of the headerless layout: 81 nodes, 380..780 nm in 5 nm steps (SPEC section 2).
+// Grid of the headerless layout: 81 nodes, 380..780 nm in 5 nm steps (design §2).
 constexpr int kWideNodes = 81;
 constexpr double kWideFirst = 380.0, kWideStep = 5.0;
 
@@ -256,7 +256,7 @@ inline double Invert(const Table &t, int k, double lambda) {
 }
 
 // (1/4) sum_k p_k(lambda) [1/nm]: the density a renderer divides by when it averages the
-// four wavelengths of a path (SPEC section 1).
+// four wavelengths of a path (design §1).
 inline double MixturePdf(const Table &t, double lambda) {
     double sum = 0.0;
     for (int k = 0; k < kNumDensities; ++k)
@@ -472,7 +472,7 @@ inline Table MakeTable(std::vector<double> grid,
     return detail::Build(std::move(grid), std::move(values), name, detail::SourceLines());
 }
 
-// A table from text in either layout of SPEC section 2; `name` is used in error messages.
+// A table from text in either layout of design §2; `name` is used in error messages.
 inline Table ParseTable(std::istream &in, const std::string &name) {
     // Collect the non-comment lines as fields, noting the header.
     struct Row {
@@ -602,7 +602,7 @@ WAVELENGTH_TABLE_HOST_DEVICE inline TableView ViewPacked(const double *packed, i
 // ---------------------------------------------------------------------------------------
 
 // (1 - share) p_k + share * uniform over [grid.front(), grid.back()] for every k: a mixture
-// with a positive density everywhere on the grid (the defensive mixture of SPEC section 1).
+// with a positive density everywhere on the grid (the defensive mixture of design §1).
 // share in [0, 1].
 inline Table WithDefensiveMixture(const Table &t, double share) {
     if (!(share >= 0.0 && share <= 1.0))

@@ -1,6 +1,6 @@
 // Tests of patches/include/wavelength_table.h: the sample / pdf / invert triples, SampleFour
 // and its balance-heuristic estimator, zero densities and the defensive mixture, both file
-// layouts and every reject class, the tables of earlier work, and the test vectors written
+// layouts and every reject class, the 4 x 81 tables of Dobos 2025, and the test vectors written
 // by the Python sampler (scripts/make_test_vectors.py).
 
 #include "wavelength_table.h"
@@ -76,7 +76,7 @@ std::string CsvText(const std::vector<double> &grid, const Values &v) {
     return s;
 }
 
-// The headerless 4 x 81 layout (with the trailing commas of the files of earlier work).
+// The headerless 4 x 81 layout (with the trailing commas of the files of Dobos 2025).
 std::string WideText(const Values &v) {
     std::string s;
     for (int k = 0; k < 4; ++k) {
@@ -556,7 +556,7 @@ TEST(WavelengthTable, ParseTableNamesTheStream) {
 }
 
 // ---------------------------------------------------------------------------------------
-// Reading tables: every reject class of SPEC section 2, with file, line and reason.
+// Reading tables: every reject class of design §2, with file, line and reason.
 // ---------------------------------------------------------------------------------------
 
 TEST(WavelengthTable, RejectsEveryClassWithFileLineAndReason) {
@@ -575,7 +575,7 @@ TEST(WavelengthTable, RejectsEveryClassWithFileLineAndReason) {
     {
         Values v = WideValues();
         v[2][40] = -1;
-        ExpectRejected("negative_wide.csv", "# earlier work\n" + WideText(v), 4,
+        ExpectRejected("negative_wide.csv", "# a 4 x 81 table\n" + WideText(v), 4,
                        "pdf2 is negative (-1) at 580 nm");
         v = WideValues();
         v[3][0] = std::numeric_limits<double>::quiet_NaN();
@@ -716,7 +716,7 @@ TEST(WavelengthTable, MakeTableRejectsWithTheName) {
 }
 
 // ---------------------------------------------------------------------------------------
-// The tables of earlier work (../shared, skipped when absent).
+// The 4 x 81 tables of Dobos 2025 (../shared, skipped when absent).
 // ---------------------------------------------------------------------------------------
 
 TEST(WavelengthTable, EveryReferenceTableLoads) {
@@ -744,7 +744,7 @@ TEST(WavelengthTable, EveryReferenceTableLoads) {
 }
 
 // ---------------------------------------------------------------------------------------
-// Cross-language test vectors (issue 4, point 3): written by scripts/make_test_vectors.py
+// Cross-language test vectors (design §8.1): written by scripts/make_test_vectors.py
 // with optimizer/wavelength_pdf/sampling.py; C++ must agree to 1e-5 relative.
 // ---------------------------------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-"""Per-pixel CIEDE2000 of the evaluation (SPEC 6): linear RGB -> XYZ -> Lab (D65, Y = 1)."""
+"""Per-pixel CIEDE2000 of the evaluation (design §6): linear RGB -> XYZ -> Lab (D65, Y = 1)."""
 from __future__ import annotations
 
 import colour

@@ -1,4 +1,4 @@
-"""The objective J of SPEC 4: exact target, refinement-stable quadrature, gradients,
+"""The objective J of design §4: exact target, refinement-stable quadrature, gradients,
 extremes (scale, a 2 nm line, long zero stretches) and the stratified-uniform baseline.
 
 All fixtures use one 21-node grid and spectra whose nodes fit one padding class, so the

@@ -1,4 +1,4 @@
-"""The sampling model of SPEC 1: sample / pdf / invert triples of a piecewise-linear density."""
+"""The sampling model of design §1: sample / pdf / invert triples of a piecewise-linear density."""
 
 import jax
 import jax.numpy as jnp

@@ -1,4 +1,4 @@
-"""Emitter spectra of pbrt-v4 scenes (SPEC 3): one per distinct emitter, every documented form."""
+"""Emitter spectra of pbrt-v4 scenes (design §3): one per distinct emitter, every documented form."""
 from __future__ import annotations
 
 import re

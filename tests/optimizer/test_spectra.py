@@ -1,4 +1,4 @@
-"""Spectrum readers (SPEC 3): LSPDD CSV, pbrt .spd, colour-science names, malformed input."""
+"""Spectrum readers (design §3): LSPDD CSV, pbrt .spd, colour-science names, malformed input."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""The table file (SPEC 2): round trip, both layouts, normalization, malformed input, atomic write."""
+"""The table file (design §2): round trip, both layouts, normalization, malformed input, atomic write."""
 from __future__ import annotations
 
 import os

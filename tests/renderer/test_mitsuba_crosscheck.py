@@ -1,4 +1,4 @@
-"""An independent-renderer check (issue 3): the same spectral Cornell-box-like scene rendered by
+"""An independent-renderer check: the same spectral Cornell-box-like scene rendered by
 Mitsuba 3 (PyPI, variant scalar_spectral) and by our pbrt, with the same absolute spectral
 radiance, agrees per channel in the image mean to 1% (beyond noise).
 

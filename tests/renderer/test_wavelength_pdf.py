@@ -1,11 +1,11 @@
-"""``pbrt --wavelength-pdf TABLE`` on the project's Cornell box (issue 4), with the real binary.
+"""``pbrt --wavelength-pdf TABLE`` on the project's Cornell box (design §1, §5.2), with the real binary.
 
 (a) Unbiased: with the scene's tri-band lamp, the image rendered with a table converges to the
     image rendered with pbrt-v4's visible sampling, for the optimizer's table, for every table of
     ../shared/tables/reference-4x81/ (made for other lamps) and for a lopsided table.
-(b) Every class of bad table of SPEC 2 stops pbrt before rendering: exit status 1 and
+(b) Every class of bad table of design §2 stops pbrt before rendering: exit status 1 and
     ``pbrt: FILE:LINE: reason`` (``FILE: reason`` for a missing file), no image written.
-(c) A table whose mixture density is zero where the lamp emits gets the warning of SPEC 1 (and
+(c) A table whose mixture density is zero where the lamp emits gets the warning of design §1 (and
     biases the image); ``--wavelength-pdf-defensive 0.01`` removes both.
 
 Statistics. Each sampler renders twice with different seeds. The per-pixel difference of the
@@ -138,7 +138,7 @@ def compare_with_visible(pbrt, scene, tmp: Path, visible: Estimate, args: tuple[
 # ---------------------------------------------------------------------------------------------
 
 def write_table(path: Path, pdfs: np.ndarray, grid: np.ndarray = GRID) -> Path:
-    """A CSV table (SPEC 2) with the given node values (4 x len(grid))."""
+    """A CSV table (design §2) with the given node values (4 x len(grid))."""
     lines = ["# test table", "lambda_nm,pdf0,pdf1,pdf2,pdf3"]
     lines += [f"{l:g}," + ",".join(f"{v:.9g}" for v in pdfs[:, i]) for i, l in enumerate(grid)]
     path.write_text("\n".join(lines) + "\n")
@@ -276,7 +276,7 @@ def test_a_narrow_table_warns_about_emission_outside_its_range(pbrt, scene, tmp_
 
 HEAD = "# a comment\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n380,1,1,1,1\n"
 BAD_TABLES = {
-    # SPEC 2 class: (file text, line named, reason fragment)
+    # design §2 class: (file text, line named, reason fragment)
     "nan": (HEAD + "385,1,nan,1,1\n", 4, "pdf1 is NaN"),
     "infinity": (HEAD + "385,1,1,inf,1\n", 4, "pdf2 is infinite"),
     "negative": (HEAD + "385,1,1,1,-0.5\n", 4, "pdf3 is negative"),

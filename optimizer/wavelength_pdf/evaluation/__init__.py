@@ -1,2 +1,2 @@
-"""The evaluation (SPEC 6): ground truth, baseline and table-driven renders of one scene, compared
+"""The evaluation (design §6): ground truth, baseline and table-driven renders of one scene, compared
 per pixel in CIEDE2000, with render times, so that error at equal spp and at equal time show."""

@@ -1,4 +1,4 @@
-"""Per-pixel colour error of a rendered image against a ground truth (SPEC 6).
+"""Per-pixel colour error of a rendered image against a ground truth (design §6).
 
 Linear RGB in the film's colour space -> XYZ (no transfer-function decoding: the EXR is
 linear) -> CIELAB with the D65 white at Y = 1 -> CIEDE2000. All colorimetry is colour-science's.
@@ -14,7 +14,7 @@ import numpy as np
 
 
 def _d65_xy() -> np.ndarray:
-    """The white of the Lab conversion: D65 chromaticity, Y = 1 (SPEC 6)."""
+    """The white of the Lab conversion: D65 chromaticity, Y = 1 (design §6)."""
     import colour
 
     return colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
@@ -49,7 +49,7 @@ def delta_e_map(image: np.ndarray, truth: np.ndarray, colourspace: str = "sRGB")
 
 @dataclass(frozen=True)
 class ErrorStats:
-    """Summary of a per-pixel error map: the mean (the figure of earlier work), median, p95."""
+    """Summary of a per-pixel error map: the mean (the figure Dobos 2025 reports), median, p95."""
 
     mean: float
     median: float

@@ -1,4 +1,4 @@
-"""A copy of a pbrt-v4 scene lit by another spectrum, for the evaluation (SPEC 6).
+"""A copy of a pbrt-v4 scene lit by another spectrum, for the evaluation (design §6).
 
 The copy is written elsewhere (../shared is read-only), so every file the scene names
 (Include/Import, meshes, textures, spectrum files) is rewritten to an absolute path. Every

@@ -27,7 +27,7 @@ struct IntegratorSettings {
 };
 
 // Radiance arriving along `ray` at the camera, at the wavelengths lambda. A dispersive
-// material on the path terminates lambda's secondary wavelengths (SPEC 1), so the caller
+// material on the path terminates lambda's secondary wavelengths (design §1), so the caller
 // must weight the result with lambda as it is after the call.
 SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                        Sampler &sampler, int maxDepth);

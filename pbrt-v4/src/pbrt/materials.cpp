@@ -18,7 +18,7 @@ namespace {
 
 // The relative IOR of a dielectric (coat) at the path's wavelengths: a constant spectrum
 // gives one value for all; any other spectrum terminates the secondary wavelengths first
-// (SPEC 1) so that the kept wavelength (now in every slot) decides the refraction. eta 0
+// (design §1) so that the kept wavelength (now in every slot) decides the refraction. eta 0
 // means 1 (pbrt-v4's convention for "no interface").
 Float SampleEta(const Spectrum &eta, SampledWavelengths &lambda, const std::function<Float()> &uFresh) {
     if (!dynamic_cast<const ConstantSpectrum *>(&eta)) lambda.TerminateSecondary(uFresh());

@@ -9,7 +9,7 @@
 //   "interface"      no surface at all: rays pass through (marks medium boundaries)
 // Every material but "interface" takes a float texture "displacement" (bump mapping,
 // bumpmap.h). A spectrally varying eta (dielectric, coateddiffuse) disperses light: the
-// BSDF keeps one of the path's wavelengths (SampledWavelengths::TerminateSecondary, SPEC 1)
+// BSDF keeps one of the path's wavelengths (SampledWavelengths::TerminateSecondary, design §1)
 // and refracts with eta at it. Every other material type is reported as an error.
 #pragma once
 
@@ -65,7 +65,7 @@ using Material = std::variant<DiffuseMaterial, InterfaceMaterial, ConductorMater
                               DielectricMaterial, CoatedDiffuseMaterial>;
 
 // The BSDF at a hit; nullopt for "interface". A material with a spectrally varying eta
-// terminates the secondary wavelengths of lambda (SPEC 1), choosing the kept one with a
+// terminates the secondary wavelengths of lambda (design §1), choosing the kept one with a
 // fresh uniform number from uFresh (called only then).
 std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
                             SampledWavelengths &lambda, const std::function<Float()> &uFresh);

@@ -16,11 +16,11 @@ struct RenderOptions {
     int nThreads = 0;                     // --nthreads: 0 = all cores
     std::optional<uint64_t> seed;         // --seed: overrides the scene's seeds
     bool quiet = false;                   // --quiet: no progress bar or summary
-    // Wavelength sampling (SPEC 5): "visible" (pbrt-v4's default) or "uniform" over
+    // Wavelength sampling (design §5): "visible" (pbrt-v4's default) or "uniform" over
     // [lambdaMin, lambdaMax] (stratified).
     std::string wavelengthSampling = "visible";
     Float lambdaMin = 360, lambdaMax = 830;
-    std::string wavelengthTable;          // --wavelength-pdf FILE: sample from a table (issue 4)
+    std::string wavelengthTable;          // --wavelength-pdf FILE: sample from a table (design §1, §2)
     Float defensiveShare = 0;             // --wavelength-pdf-defensive S: uniform share in [0, 1]
     Point2i resolution{0, 0};             // --resolution WxH (0: the film's)
     Float resolutionScale = 1;            // --resolution-scale S: multiplies the resolution

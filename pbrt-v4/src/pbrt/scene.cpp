@@ -604,7 +604,7 @@ void SceneBuilder::EndOfFiles() {
     CheckUnused(integDict, "Integrator \"" + integ.name + "\"");
     if (opts.maxDepth) scene->integrator.maxDepth = *opts.maxDepth;
 
-    // Wavelength sampling (a table, issue 4, or a built-in sampler).
+    // Wavelength sampling (a table, design §1, or a built-in sampler, design §5.2).
     if (!opts.wavelengthTable.empty())
         scene->wavelengths = WavelengthSampler::FromTable(opts.wavelengthTable, opts.defensiveShare);
     else if (opts.wavelengthSampling == "visible") scene->wavelengths = WavelengthSampler::Visible();
@@ -616,7 +616,7 @@ void SceneBuilder::EndOfFiles() {
     for (Light &l : scene->lights) l.Preprocess(scene->accel->Bounds());
     scene->lightSampler = LightSampler(scene->lights);
     if (scene->lights.empty()) Warning("the scene has no lights; the image will be black");
-    // SPEC 1: a light emitting where the sampling density is zero biases the image.
+    // design §1: a light emitting where the sampling density is zero biases the image.
     for (const std::string &w : UnsampledEmissionWarnings(scene->wavelengths, scene->lights)) Warning(w);
 }
 

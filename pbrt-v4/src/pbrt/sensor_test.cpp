@@ -91,7 +91,7 @@ TEST(FilmSensor, VisibleAndUniformSamplingConverge) {
 }
 
 TEST(FilmSensor, EmitterNormalizedToOneNitHasYEqualToScale) {
-    // pbrt-v4's emitter convention (SPEC 5): L = scale * s / SpectrumToPhotometric(s), with
+    // pbrt-v4's emitter convention (design §5): L = scale * s / SpectrumToPhotometric(s), with
     // the light's spectrum kept densely sampled (as pbrt-v4's lights keep it). The film then
     // sees Y = scale (up to the half-nanometre bins at 360 and 830 nm, where ybar ~ 0).
     SpectrumHandle s = SpikyLamp();

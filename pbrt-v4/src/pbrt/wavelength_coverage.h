@@ -1,4 +1,4 @@
-// Emission that a table-driven wavelength sampler never samples (SPEC section 1).
+// Emission that a table-driven wavelength sampler never samples (design §1).
 //
 // A path only carries wavelengths where the sampler's density is positive. Where a light
 // emits but the density is zero, its light is missing from the image: the render is biased,

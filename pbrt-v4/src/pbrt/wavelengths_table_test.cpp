@@ -1,4 +1,4 @@
-// Table-driven wavelength sampling in the renderer (issue 4): WavelengthSampler::FromTable
+// Table-driven wavelength sampling in the renderer (design §1, §5.2): WavelengthSampler::FromTable
 // goes through patches/include/wavelength_table.h and hands the film the mixture density;
 // the scene builder warns when a light emits where the table never samples.
 //
@@ -96,7 +96,7 @@ Shape "sphere" "float radius" [1]
 )";
 }
 
-// The expected XYZ of every furnace pixel: the film sums raw CMF * L / pdf (SPEC 5), the sky
+// The expected XYZ of every furnace pixel: the film sums raw CMF * L / pdf (design §5), the sky
 // is normalized to 1 nit by its 1 nm luminance sum and multiplied by its scale.
 std::array<double, 3> FurnaceXYZ() {
     std::vector<Float> ll, lv, rl, rv;

@@ -203,7 +203,7 @@ TEST(SampledWavelengths, TerminateSecondaryIsUnbiased) {
     EXPECT_NEAR(avg / full, 1, 1e-6);
 
     // By Monte Carlo for a mixture of four different densities (as a wavelength table gives,
-    // SPEC section 1): keeping a uniformly chosen wavelength is unbiased, always keeping the
+    // design §1): keeping a uniformly chosen wavelength is unbiased, always keeping the
     // first one is not.
     Triple dens[4] = {Uniform(360, 830), Visible(), Uniform(400, 700), Uniform(500, 600)};
     auto mixture = [&](Float u, SampledWavelengths *out) {

@@ -7,7 +7,7 @@
 // normalized wavelength t = (lambda - 595) / 235 in [-1, 1]. For each RGB on a grid the
 // three coefficients are found by Gauss-Newton iterations that drive the CIELAB difference
 // (CIE 1976) between the target and the colour of s lit by the colour space's illuminant to
-// zero. The grid is the paper's (and pbrt-v4's): for each largest component l, its value z
+// zero. The grid is Jakob and Hanika 2019's (and pbrt-v4's): for each largest component l, its value z
 // on kRes smoothstep(smoothstep) nodes and the other two components' ratios to it on kRes
 // even steps; neighbouring solutions along z seed each other, starting from z node kRes/5.
 //
