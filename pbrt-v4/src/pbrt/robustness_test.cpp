@@ -325,3 +325,12 @@ AreaLightSource "diffuse" "rgb L" [ 1e30 1e30 1e30 ] "float scale" [ 1e30 ]
     Image img = scene->film->GetImage();
     for (float v : img.pixels) EXPECT_TRUE(std::isfinite(v));
 }
+
+TEST(Robustness, HugeFilmIsRefusedBeforeTheWorldIsRead) {
+    // The Film statement fails at once: the mesh after WorldBegin is never built (it would
+    // fail with its own, later error).
+    std::string msg = LoadError("Film \"rgb\" \"integer xresolution\" [ 2000000000 ] \"integer yresolution\" [ 2000000000 ]\n"
+                                "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 ]\n");
+    EXPECT_NE(msg.find("test.pbrt:1:1"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("GB of memory"), std::string::npos) << msg;
+}

@@ -183,6 +183,11 @@ class SceneBuilder : public ParserTarget {
     void Film(const std::string &type, ParsedParameterVector params, FileLoc loc) override {
         RequireOptionsBlock("Film", loc);
         filmDesc = {type, std::move(params), loc, graphicsState.colorSpace};
+        // A film that cannot be made (too big for memory, a bad resolution) is refused here,
+        // before the world (perhaps huge meshes) is read; EndOfFiles makes it for real.
+        ParameterDictionary early(filmDesc->params);
+        FilmSettings::Create(type, early, graphicsState.colorSpace, opts.resolution,
+                             opts.resolutionScale, loc);
     }
     void Sampler(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
         RequireOptionsBlock("Sampler", loc);
