@@ -246,25 +246,31 @@ def merge_truth(chunks: Sequence[rendering.Render], jobs: Sequence[RenderJob], o
 
 def finish(p: Plan, truth: rendering.Render, images: dict[tuple[str, int, int], rendering.Render]) -> Evaluation:
     """Compare the rendered images with the truth; the rows (also written to ``results.csv``)."""
-    config = p.config
     ev = Evaluation(truth=truth.image, truth_seconds=truth.seconds, table=p.table, scene=p.scene)
-    ref = read_rgb(truth.image)
+    return score(ev, p.name, p.illuminant, p.outdir, p.config, read_rgb(truth.image), images)
+
+
+def score(ev: Evaluation, name: str, illuminant: str, outdir: Path, config: Config, truth: np.ndarray,
+          images: dict[tuple[str, int, int], rendering.Render]) -> Evaluation:
+    """Per-pixel CIEDE2000 of every image (keyed by method, spp, seed) against ``truth``; one row
+    per method and spp (the seeds averaged, their spread the noise of the mean) appended to
+    ``ev`` and written to ``outdir/results.csv``. Shared by every renderer's protocol."""
     results: dict[tuple[str, int], list[tuple[metrics.ErrorStats, float, Path, np.ndarray]]] = {}
     for (method, spp, _), r in images.items():
-        emap = metrics.delta_e_map(read_rgb(r.image), ref)
+        emap = metrics.delta_e_map(read_rgb(r.image), truth)
         results.setdefault((method, spp), []).append((metrics.ErrorStats.of(emap), r.seconds, r.image, emap))
     for method in config.methods:
         for spp in config.spp:
             runs = results[(method, spp)]
             means = np.array([st.mean for st, *_ in runs])
             ev.error_maps[(method, spp)] = runs[0][3]
-            ev.rows.append(Row(p.name, p.illuminant, method, spp, float(means.mean()),
+            ev.rows.append(Row(name, illuminant, method, spp, float(means.mean()),
                                float(np.mean([st.median for st, *_ in runs])),
                                float(np.mean([st.p95 for st, *_ in runs])),
                                float(np.mean([sec for _, sec, *_ in runs])),
-                               str(Path(runs[0][2]).relative_to(p.outdir)), len(runs),
+                               str(Path(runs[0][2]).relative_to(outdir)), len(runs),
                                float(means.std(ddof=1)) if len(runs) > 1 else float("nan")))
-    write_rows(p.outdir / "results.csv", ev.rows)
+    write_rows(Path(outdir) / "results.csv", ev.rows)
     return ev
 
 

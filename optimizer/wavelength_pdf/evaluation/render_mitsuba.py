@@ -27,8 +27,7 @@ from typing import Callable
 
 import numpy as np
 
-from wavelength_pdf.evaluation import metrics
-from wavelength_pdf.evaluation.protocol import Config, Evaluation, Row, ensure_table, write_rows
+from wavelength_pdf.evaluation.protocol import Config, Evaluation, ensure_table, score
 from wavelength_pdf.evaluation.render import Render, RenderError, file_digest
 from wavelength_pdf.exr import read_rgb, write_rgb
 from wavelength_pdf.spectra import Spectrum, SpectrumError
@@ -258,26 +257,14 @@ def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Con
     truth = read_rgb(gt.image)
     name = scene_name or _scene_name(scene)
     seeds = [config.seed + k for k in range(max(1, config.seeds))]
-    results: dict[tuple[str, int], list] = {}
+    images = {}
     for spp in config.spp:  # methods interleaved, as in the pbrt protocol
         for seed in seeds:
             for method in config.methods:
                 say(f"{method}: {spp} spp, seed {seed}")
-                r = render(scenes[method], params, outdir / "renders" / f"{method}-{spp}-seed{seed}.exr",
-                           spp, seed, variant)
-                emap = metrics.delta_e_map(read_rgb(r.image), truth)
-                results.setdefault((method, spp), []).append((metrics.ErrorStats.of(emap), r.seconds, r.image, emap))
-    for method in config.methods:
-        for spp in config.spp:
-            runs = results[(method, spp)]
-            means = np.array([st.mean for st, *_ in runs])
-            ev.error_maps[(method, spp)] = runs[0][3]
-            ev.rows.append(Row(name, spectrum.name, method, spp, float(means.mean()),
-                               float(np.mean([st.median for st, *_ in runs])),
-                               float(np.mean([st.p95 for st, *_ in runs])),
-                               float(np.mean([sec for _, sec, *_ in runs])),
-                               str(Path(runs[0][2]).relative_to(outdir)), len(runs),
-                               float(means.std(ddof=1)) if len(runs) > 1 else float("nan")))
-    write_rows(outdir / "results.csv", ev.rows)
+                images[(method, spp, seed)] = render(scenes[method], params,
+                                                     outdir / "renders" / f"{method}-{spp}-seed{seed}.exr",
+                                                     spp, seed, variant)
+    score(ev, name, spectrum.name, outdir, config, truth, images)
     return ev
 
