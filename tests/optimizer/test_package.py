@@ -104,3 +104,14 @@ def test_ipopt_without_cyipopt_says_how_to_install(monkeypatch):
                         lambda name, *a: None if name == "cyipopt" else real(name, *a))
     with pytest.raises(ValueError, match=r"wavelength-pdf\[ipopt\]"):
         optimize.optimize_spectrum(load_spectrum("cie:D65"), solver="ipopt")
+
+
+def test_every_subpackage_is_in_the_wheel(repo):
+    """pyproject.toml lists the packages by hand (the data folders are mapped into the
+    package): a subpackage missing from the list would be missing from an installed wheel."""
+    import tomllib
+
+    listed = set(tomllib.loads((repo / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    root = repo / "optimizer"
+    found = {".".join(p.parent.relative_to(root).parts) for p in root.rglob("__init__.py")}
+    assert found <= listed, f"not in pyproject.toml's packages: {sorted(found - listed)}"
