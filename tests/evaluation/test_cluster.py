@@ -102,9 +102,11 @@ def dask_cluster(tmp_path_factory):
 def no_colour_bars(monkeypatch):
     """The jobs' colour bar and densities plots are not what these tests check, and computing
     them (JAX compilation) is most of a tiny grid's time: leave them out."""
+    from wavelength_pdf import plots  # the commands import it where they draw
+
     drawn = []
-    monkeypatch.setattr(commands.plots, "colour_bar_png", lambda path, *a: drawn.append(path))
-    monkeypatch.setattr(commands.plots, "densities_png", lambda path, *a: drawn.append(path))
+    monkeypatch.setattr(plots, "colour_bar_png", lambda path, *a: drawn.append(path))
+    monkeypatch.setattr(plots, "densities_png", lambda path, *a: drawn.append(path))
     return drawn
 
 
