@@ -24,8 +24,6 @@ REPO = CHECKOUT
 CHECKOUT_PBRT = CHECKOUT / "build" / "pbrt"
 #: Environment variable naming the renderer binary.
 PBRT_ENV = "WAVELENGTH_PDF_PBRT"
-#: Kept for callers that name the default: lookup happens in :func:`find_pbrt`.
-DEFAULT_PBRT = None
 
 
 class RendererNotFound(FileNotFoundError):
