@@ -101,18 +101,21 @@ struct TableView {
 // ---------------------------------------------------------------------------------------
 namespace kernel {
 
-// Largest i in [0, n-1] with x[i] <= v (0 if v < x[0]); x is non-decreasing. A hand-written
-// binary search instead of std::upper_bound so that it also compiles as device code.
+// Largest i in [0, n-1] with x[i] <= v (0 if v < x[0] or v is NaN); x is non-decreasing.
+// A hand-written search instead of std::upper_bound so that it also compiles as device code,
+// and branch-free (the step is a conditional move, Khuong and Morin 2017): the comparisons
+// of a sampled wavelength are unpredictable, so a branching search mispredicts about every
+// other step, and a table of several hundred nodes would cost noticeably more per path than
+// one of 81.
 WAVELENGTH_TABLE_HOST_DEVICE inline int LastNotAbove(const double *x, int n, double v) {
-    int lo = 0, hi = n;  // invariant: x[j] <= v for j < lo, x[j] > v for j >= hi
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        if (x[mid] <= v)
-            lo = mid + 1;
-        else
-            hi = mid;
+    // invariant: the answer lies in [base, base + len - 1], and x[base] <= v unless base = 0
+    int base = 0, len = n;
+    while (len > 1) {
+        const int half = len / 2;
+        base = (x[base + half] <= v) ? base + half : base;
+        len -= half;
     }
-    return lo > 0 ? lo - 1 : 0;
+    return base;
 }
 
 // lambda = F^-1(u), exact for the piecewise-linear density; *segment receives the i with

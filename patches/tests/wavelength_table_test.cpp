@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -156,6 +157,29 @@ void ExpectRejected(const std::string &name, const std::string &text, int line,
 // ---------------------------------------------------------------------------------------
 // The sample / pdf / invert triple.
 // ---------------------------------------------------------------------------------------
+
+// The branch-free search against std::upper_bound: every size up to 70, runs of equal values
+// (a CDF is flat over a zero-density segment), values below, between, on and above the nodes,
+// and NaN (which maps to 0, as u = NaN counts as 0).
+TEST(WavelengthTable, LastNotAboveIsTheLastNodeNotAboveTheValue) {
+    std::mt19937_64 rng(7);
+    std::uniform_int_distribution<int> step(0, 2);  // 0: a tie with the previous node
+    for (int n = 1; n <= 70; ++n) {
+        std::vector<double> x(n);
+        double at = 0;
+        for (double &xi : x) xi = at += step(rng);
+        std::vector<double> probes = {-1.0, x.back() + 1, std::numeric_limits<double>::quiet_NaN()};
+        for (double xi : x) {
+            probes.push_back(xi);
+            probes.push_back(xi + 0.5);
+        }
+        for (double v : probes) {
+            const int got = wt::kernel::LastNotAbove(x.data(), n, v);
+            const int want = std::max(0, int(std::upper_bound(x.begin(), x.end(), v) - x.begin()) - 1);
+            EXPECT_EQ(got, std::isnan(v) ? 0 : want) << "n = " << n << ", v = " << v;
+        }
+    }
+}
 
 TEST(WavelengthTable, PdfIntegratesToOneAndCdfIsItsIntegral) {
     const wt::Table t = AwkwardTable();
