@@ -26,10 +26,8 @@ DEFAULT_GRID = np.linspace(RANGE[0], RANGE[1], int(round((RANGE[1] - RANGE[0]) /
 #: the optimizer can write is far below the readers' 64 MiB file limit (~0.5 MB).
 MAX_TABLE_NODES = 4001
 
-#: Most nodes of one objective: the union of the table's, the spectrum's (after thinning,
-#: ``objective.SPECTRUM_TOL``) and the CMFs' nodes inside the table's range. Every
-#: evaluation holds arrays of a few tens of kB per node (``OBJECTIVE_BYTES_PER_NODE``).
-MAX_OBJECTIVE_NODES = 20000
+#: The optimizer's own memory (code, JAX, colour data) before any problem, bytes.
+OPTIMIZER_BASE_BYTES = 0.7e9
 
 #: Bytes per table node squared (the interpolation matrices of the table grid and its
 #: coarsest level: 8 + 8 / 4, times 2 for the copies JAX holds).
@@ -63,15 +61,28 @@ def check_table_nodes(n: int | float, what: str) -> None:
             f"{MAX_TABLE_NODES} nodes (0.1 nm steps over 380-780 nm, design §2.3)")
 
 
+def physical_memory() -> float:
+    """The machine's physical memory in bytes (inf where the system does not say)."""
+    import os
+
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE")) * float(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return float("inf")
+
+
 def check_objective_nodes(n: int, table_nodes: int, what: str) -> None:
-    """Refuse an objective of more than ``MAX_OBJECTIVE_NODES`` nodes (a spectrum sampled
-    finer than it can matter, over many thousands of samples that do not thin away)."""
-    if n > MAX_OBJECTIVE_NODES:
+    """Refuse an objective whose nodes (the union of the spectrum's, after thinning, the
+    CMFs' and the table's) would need more memory than the machine has: a spectrum sampled
+    far finer than it can matter, over very many samples that do not thin away."""
+    need = OPTIMIZER_BASE_BYTES + optimizer_memory(table_nodes, n)
+    have = physical_memory()
+    if need > have:
         raise TooLargeError(
             f"{what}: the spectrum, the colour matching functions and the table grid have "
             f"{n} distinct nodes in the table's range: the optimizer would need about "
-            f"{_gb(optimizer_memory(table_nodes, n))} of memory; the limit is "
-            f"{MAX_OBJECTIVE_NODES} (resample the spectrum more coarsely, design §2.3)")
+            f"{_gb(need)} of memory, more than this machine's {_gb(have)} (resample the "
+            "spectrum more coarsely, design §2.3)")
 
 
 def trapezoid(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
