@@ -18,6 +18,73 @@ STEP = 5.0
 DEFAULT_GRID = np.linspace(RANGE[0], RANGE[1], int(round((RANGE[1] - RANGE[0]) / STEP)) + 1)
 
 
+#: Most table nodes the optimizer works with (design §2.3): 0.1 nm steps over the default
+#: range. Its solvers hold dense interpolation matrices between the table grid and its
+#: coarse levels, whose memory grows with the square of the node count (about 33 GB at
+#: 0.01 nm steps, 40 001 nodes); at this limit it needs ~0.45 GB beyond its ~0.7 GB of code
+#: (measured peak resident size with D65: 0.76 GB at 401 nodes, 0.88 GB at 2001). Any table
+#: the optimizer can write is far below the readers' 64 MiB file limit (~0.5 MB).
+MAX_TABLE_NODES = 4001
+
+#: The optimizer's own memory (code, JAX, colour data) before any problem, bytes.
+OPTIMIZER_BASE_BYTES = 0.7e9
+
+#: Bytes per table node squared (the interpolation matrices of the table grid and its
+#: coarsest level: 8 + 8 / 4, times 2 for the copies JAX holds).
+TABLE_BYTES_PER_NODE2 = 20
+#: Bytes per objective node that one evaluation and its gradient hold at their peak (the
+#: u-quadrature's arrays: 4 densities x 4 breakpoints a node x 4 points x ~30 arrays).
+OBJECTIVE_BYTES_PER_NODE = 30_000
+
+
+def optimizer_memory(table_nodes: int, objective_nodes: int = 0) -> float:
+    """Rough memory the optimizer needs beyond its ~0.7 GB of code, in bytes."""
+    return TABLE_BYTES_PER_NODE2 * float(table_nodes) ** 2 + OBJECTIVE_BYTES_PER_NODE * float(
+        max(objective_nodes, table_nodes))
+
+
+def _gb(n_bytes: float) -> str:
+    return f"{n_bytes / 1e9:.3g} GB"
+
+
+class TooLargeError(ValueError):
+    """A problem that cannot fit the optimizer's memory bounds (design §2.3)."""
+
+
+def check_table_nodes(n: int | float, what: str) -> None:
+    """Refuse a table grid of more than ``MAX_TABLE_NODES`` nodes, naming the size it
+    would need; ``what`` says where the grid came from (e.g. ``--grid-step 0.01``)."""
+    if n > MAX_TABLE_NODES:
+        raise TooLargeError(
+            f"{what} gives a table of {n:.0f} nodes: the optimizer would need about "
+            f"{_gb(optimizer_memory(int(n)))} of memory for it; the limit is "
+            f"{MAX_TABLE_NODES} nodes (0.1 nm steps over 380-780 nm, design §2.3)")
+
+
+def physical_memory() -> float:
+    """The machine's physical memory in bytes (inf where the system does not say)."""
+    import os
+
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE")) * float(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return float("inf")
+
+
+def check_objective_nodes(n: int, table_nodes: int, what: str) -> None:
+    """Refuse an objective whose nodes (the union of the spectrum's, after thinning, the
+    CMFs' and the table's) would need more memory than the machine has: a spectrum sampled
+    far finer than it can matter, over very many samples that do not thin away."""
+    need = OPTIMIZER_BASE_BYTES + optimizer_memory(table_nodes, n)
+    have = physical_memory()
+    if need > have:
+        raise TooLargeError(
+            f"{what}: the spectrum, the colour matching functions and the table grid have "
+            f"{n} distinct nodes in the table's range: the optimizer would need about "
+            f"{_gb(need)} of memory, more than this machine's {_gb(have)} (resample the "
+            "spectrum more coarsely, design §2.3)")
+
+
 def trapezoid(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Integral over ``grid`` along the last axis of piecewise-linear ``values`` (exact).
 

@@ -51,7 +51,7 @@ from . import colorimetry, sampling
 
 Array = jax.Array
 
-from .model import DEFAULT_GRID  # noqa: E402  (380, 385, ..., 780 nm; design §1)
+from .model import DEFAULT_GRID, check_objective_nodes, check_table_nodes  # noqa: E402
 
 #: Gauss-Legendre points per piece between u-breakpoints: the resolution the solvers
 #: search with and report (J), and the refined one that shows J has converged (J_fine;
@@ -187,6 +187,7 @@ def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID) -> Problem:
     if not np.all(np.diff(wl) > 0):
         raise ValueError(f"{source}: spectrum wavelengths are not strictly increasing")
     lo, hi = float(grid[0]), float(grid[-1])
+    check_table_nodes(grid.size, f"{source}: the table grid")
     if wl.size > SPECTRUM_MAX_SAMPLES and np.max(val) > 0:
         wl, val = _thin_spectrum(wl, val, SPECTRUM_TOL * np.max(val))
 
@@ -197,6 +198,7 @@ def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID) -> Problem:
     cval_r = np.concatenate([np.zeros((1, 3)), cval, np.zeros((1, 3))])
     nodes = np.unique(np.concatenate([swl, cwl_r, grid]))
     nodes = nodes[(nodes >= lo) & (nodes <= hi)]
+    check_objective_nodes(nodes.size, grid.size, source)
     spec = np.interp(nodes, swl, sval, left=0.0, right=0.0)
     cmf = np.stack([np.interp(nodes, cwl_r, cval_r[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
 

@@ -17,7 +17,7 @@ from typing import Any, Callable
 import numpy as np
 
 from wavelength_pdf.spectra import Spectrum
-from wavelength_pdf.model import RANGE
+from wavelength_pdf.model import RANGE, check_table_nodes
 from wavelength_pdf.result import Result, read_header  # noqa: F401  (read_header: re-export)
 from wavelength_pdf.table import write_table
 
@@ -85,6 +85,8 @@ def make_grid(lo: float, hi: float, step: float | str) -> np.ndarray | str:
     if not (math.isfinite(step) and step > 0):
         raise GridError(f"--grid-step must be positive, got {step:g}")
     n = (hi - lo) / step
+    # Before the grid is made: a step of 1e-9 nm would ask for 4e11 nodes.
+    check_table_nodes(n + 1, f"--grid-step {step:g} nm over {lo:g}-{hi:g} nm")
     m = int(round(n))
     if m < 1 or abs(n - m) > 1e-9 * max(1.0, n):
         raise GridError(f"--grid-step {step:g} nm does not divide the range {lo:g}-{hi:g} nm")

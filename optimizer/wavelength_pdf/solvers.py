@@ -28,7 +28,10 @@ exactly to the table grid) are small jitted maps whose vector-Jacobian product i
 on top. SciPy and Ipopt see float64 NumPy arrays.
 
 Solvers are deterministic for the same input and seed, as long as ``max_seconds`` does not
-cut a run short (the evaluation budget is what normally stops them).
+cut a run short (the evaluation budget is what normally stops them). ``max_seconds`` counts
+from the solver's call, including the compiling of its objective: the clock is read before
+every evaluation and before every stage (a stage that cannot start is skipped, not compiled),
+so a run ends at most one evaluation, or one compilation already under way, after the cap.
 """
 
 from __future__ import annotations
@@ -217,6 +220,9 @@ class _Context:
     def __init__(self, problem: Problem, P_init: np.ndarray, progress: Progress | None,
                  max_evals: int, max_seconds: float | None, penalty_weight: float = PENALTY_WEIGHT,
                  search_tol: float | None = None, search_order: int | None = None):
+        # The clock starts before the first compilation (health, variance, J_init below).
+        self.deadline = None if max_seconds is None else time.monotonic() + max_seconds
+        self.timed_out = False
         self.problem = problem
         self.search = objective.simplify(problem, SEARCH_TOL if search_tol is None else search_tol)
         self.arr = self.search.arrays
@@ -235,7 +241,6 @@ class _Context:
         self.mu = float(penalty_weight * max(self.J_init, 1e-3))
         self.progress = progress
         self.max_evals = max_evals
-        self.deadline = None if max_seconds is None else time.monotonic() + max_seconds
         self.nfev = 0
         self.history: list[float] = []
         self.best_J = np.inf
@@ -269,7 +274,9 @@ class _Context:
     def out_of_budget(self) -> bool:
         if self.nfev >= self.max_evals:
             return True
-        return self.deadline is not None and time.monotonic() > self.deadline
+        if self.deadline is not None and time.monotonic() > self.deadline:
+            self.timed_out = True
+        return self.timed_out
 
     def table(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
         E, mask = self._j(level)
@@ -351,6 +358,8 @@ class _Point:
 def _run_scipy(ctx: _Context, start: _Point, level: Level, name: str, method: str, maxiter: int) -> _Point:
     """One SciPy run from ``start`` on ``level`` in parameterization ``name``."""
     V0 = start.on(level)
+    if ctx.out_of_budget():  # skipped before its level's reference is computed (compiled)
+        return _Point(V=V0, level=level, val=start.val, J=start.J, name=start.name)
     x0 = PARAMETERIZATIONS[name].from_V(V0, level.mask)
     tracker = _Tracker()
     f = ctx.fun(level, name, tracker)
@@ -387,6 +396,8 @@ def _table_of(ctx: _Context, pt: _Point) -> np.ndarray:
 
 
 def _finish(ctx: _Context, P: np.ndarray, message: str) -> SolverResult:
+    if ctx.timed_out:
+        message += "; stopped by the time cap"
     return SolverResult(P=P, J=objective.J(ctx.problem, P), history=list(ctx.history),
                         nfev=ctx.nfev, message=message)
 

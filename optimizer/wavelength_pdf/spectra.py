@@ -52,6 +52,19 @@ __all__ = [
 VISIBLE_RANGE: tuple[float, float] = RANGE
 
 
+#: Spectra whose peak lies outside [2^-64, 2^64] are scaled by a power of two, exactly (every
+#: ratio of values stays bit for bit), to a peak in [0.5, 1): units are arbitrary, and so
+#: neither squares of the values nor the single precision of a pbrt scene written from the
+#: spectrum (the evaluation's) can overflow or underflow. Other spectra keep their values.
+PEAK_RANGE: tuple[float, float] = (2.0**-64, 2.0**64)
+
+#: Largest ratio of a spectrum's peak to its smallest positive value (design §3.3). Beyond
+#: it the small values cannot be held in double precision next to the peak once the peak is
+#: scaled to 1 (they would fall below the smallest normal number, 2.2e-308): such a spectrum
+#: is refused rather than silently changed.
+MAX_DYNAMIC_RANGE = 1e300
+
+
 class SpectrumError(ValueError):
     """A spectrum that cannot be read or used; the message reads ``path:line: reason``."""
 
@@ -108,8 +121,11 @@ def make_spectrum(
     Raises
     ------
     SpectrumError
-        Fewer than 2 samples, a non-finite or negative value, or wavelengths that are not
-        strictly increasing.
+        Fewer than 2 samples, a non-finite or negative value, wavelengths that are not
+        strictly increasing, or positive values spanning more than ``MAX_DYNAMIC_RANGE``.
+
+    A spectrum whose peak lies outside ``PEAK_RANGE`` is scaled by a power of two to a peak
+    in [0.5, 1) (exact; units are arbitrary).
     """
     where = source if where is None else where
     lam = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
@@ -138,6 +154,20 @@ def make_spectrum(
         raise SpectrumError(
             f"{at(i)}: wavelengths must be strictly increasing ({float(lam[i - 1])!r} then {float(lam[i])!r} nm)"
         )
+    positive = np.flatnonzero(val > 0)
+    if positive.size:
+        i_max = int(positive[np.argmax(val[positive])])
+        i_min = int(positive[np.argmin(val[positive])])
+        peak, least = float(val[i_max]), float(val[i_min])
+        # Compared in logarithms: the ratio itself may not be representable.
+        if math.log10(peak) - math.log10(least) > math.log10(MAX_DYNAMIC_RANGE):
+            raise SpectrumError(
+                f"{at(i_min)}: value {least!r} at {float(lam[i_min])!r} nm is "
+                f"1e{math.log10(least) - math.log10(peak):.0f} of the peak {peak!r} (at "
+                f"{float(lam[i_max])!r} nm): a dynamic range beyond {MAX_DYNAMIC_RANGE:g} cannot "
+                "be held in double precision once normalized; write such values as 0")
+        if not (PEAK_RANGE[0] <= peak <= PEAK_RANGE[1]):
+            val = np.ldexp(val, -int(np.frexp(peak)[1]))  # exact: no value underflows
     lam.setflags(write=False)
     val.setflags(write=False)
     return Spectrum(name=name, source=source, wavelengths=lam, values=val)

@@ -103,10 +103,17 @@ def test_help_lists_the_solver_registry(capsys):
         (["show", "{tmp}/none.csv"], "no such file"),
         (["show", "{tmp}/bad.csv"], "bad.csv:3: pdf0 is negative"),
         (["batch", "{tmp}/no-folder", "-o", "{tmp}/out"], "not a folder"),
+        # Directories where files are expected: named as such, not "no such file".
+        (["optimize", "{tmp}/dir.spd", "-o", "{tmp}/t.csv"], "dir.spd: is a directory"),
+        (["optimize", "{tmp}/dir.pbrt", "-o", "{tmp}/t.csv"], "dir.pbrt is a directory"),
+        (["optimize", "{tmp}/inc.pbrt", "-o", "{tmp}/t.csv"], "inc.pbrt:2: "),
     ],
 )
 def test_bad_input_exits_2_with_message(tmp_path, capsys, argv, message):
     (tmp_path / "bad.csv").write_text("lambda_nm,pdf0,pdf1,pdf2,pdf3\n380,1,1,1,1\n780,-1,1,1,1\n")
+    (tmp_path / "dir.spd").mkdir()
+    (tmp_path / "dir.pbrt").mkdir()
+    (tmp_path / "inc.pbrt").write_text('WorldBegin\nInclude "dir.pbrt"\n')
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

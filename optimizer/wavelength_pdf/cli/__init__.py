@@ -27,7 +27,7 @@ import sys
 from typing import Sequence
 
 from wavelength_pdf import __version__
-from wavelength_pdf.model import RANGE
+from wavelength_pdf.model import MAX_TABLE_NODES, RANGE
 from wavelength_pdf.spectra import SpectrumError
 from wavelength_pdf.table import TableError
 
@@ -86,7 +86,8 @@ def range_args(parser: argparse.ArgumentParser) -> None:
                         default=RANGE,
                         help=f"wavelength range of the table, nm (default: {RANGE[0]:g} {RANGE[1]:g})")
     parser.add_argument("--grid-step", default="auto", metavar="NM",
-                        help="spacing of the table's nodes, nm, which must divide the range; "
+                        help="spacing of the table's nodes, nm, which must divide the range "
+                             f"and give at most {MAX_TABLE_NODES} nodes (design §2.3); "
                              "or 'auto' (default): 5 nm over 380-780, refined around the lines "
                              "of a line lamp where that lowers J")
 
@@ -108,8 +109,9 @@ def solver_args(parser: argparse.ArgumentParser, names: list[str]) -> None:
                         help="random seed; same input and seed give the same table "
                              "(default: 0)")
     parser.add_argument("--max-seconds", type=positive_seconds, default=None, metavar="S",
-                        help="cap on the solver's wall time per spectrum, seconds; the "
-                             "best table found so far is kept (default: the solver's own "
+                        help="cap on the wall time per spectrum, seconds, counted from its "
+                             "start (compiling included; design §7); the best table found so "
+                             "far is kept, judged like any other (default: the solver's own "
                              "evaluation budget, which keeps results reproducible)")
     parser.add_argument("--max-evals", type=positive_int, default=None, metavar="N",
                         help="the solver's evaluation budget per spectrum (default: the "

@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import warnings
 
 import numpy as np
 
-from wavelength_pdf.cli import SPECTRUM_HELP, Formatter
+from wavelength_pdf.cli import PROG, SPECTRUM_HELP, Formatter
+from wavelength_pdf.coverage import coverage
 from wavelength_pdf.model import trapezoid
 from wavelength_pdf.spectra import load_spectra
 from wavelength_pdf.table import read_table
@@ -41,6 +43,9 @@ def cmd_show(args: argparse.Namespace) -> int:
         from wavelength_pdf.optimize import evaluate_table
 
         for sp in spectra:
+            # Light the table never samples (design §1.5), as the renderer warns about it.
+            for w in coverage(grid, pdfs, sp).warnings(sp.name):
+                print(f"{PROG}: warning: {w}", file=sys.stderr)
             ev = evaluate_table(sp, table)
             print(f"{sp.name}: J {ev.J:.6g} (J_fine {ev.J_fine:.6g}), uniform "
                   f"{ev.J_uniform:.6g}, ratio {ev.J_over_uniform:.4f}")
@@ -55,7 +60,9 @@ def add_parser(sub) -> None:
                        help="print a table's grid, normalization, J and health",
                        description="Print a table's grid, the normalization of its four "
                                    "densities and its header; with --spectrum, its "
-                                   "objective J and estimator health for that spectrum.")
+                                   "objective J and estimator health for that spectrum, and a "
+                                   "warning where the table never samples light the spectrum "
+                                   "emits (design §1.5).")
     s.add_argument("table", metavar="TABLE", help="table file (either layout of design §2)")
     s.add_argument("--spectrum", metavar="SPECTRUM",
                    help="evaluate J and health of the table for this spectrum (" +

@@ -120,6 +120,20 @@ int Accelerator::NewObject() {
 
 bool Accelerator::ObjectIsEmpty(int object) const { return impl->objects[object].records.empty(); }
 
+Bounds3f Accelerator::ObjectBounds(int object) {
+    Object &obj = impl->objects[object];
+    if (obj.records.empty()) return Bounds3f();
+    if (!obj.committed) {
+        rtcCommitScene(obj.scene);
+        impl->Check("building an object instance's BVH");
+        obj.committed = true;
+    }
+    RTCBounds b;
+    rtcGetSceneBounds(obj.scene, &b);
+    if (!(b.lower_x <= b.upper_x)) return Bounds3f();
+    return Bounds3f(Point3f(b.lower_x, b.lower_y, b.lower_z), Point3f(b.upper_x, b.upper_y, b.upper_z));
+}
+
 void Accelerator::AddMesh(int object, std::shared_ptr<TriangleMesh> mesh, int material,
                           int lightOffset) {
     Object &obj = impl->objects[object];

@@ -29,6 +29,8 @@ class Accelerator {
     // Places object `object` (>= 1) in the top level with the transform renderFromInstance.
     void AddInstance(int object, const Transform &renderFromInstance);
     bool ObjectIsEmpty(int object) const;
+    // Bounds of object `object` (>= 1) in its own space (builds its BVH if not built yet).
+    Bounds3f ObjectBounds(int object);
     // Builds the BVHs; call once after adding everything.
     void Commit();
 

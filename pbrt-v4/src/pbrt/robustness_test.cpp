@@ -158,6 +158,36 @@ TEST(Robustness, GeometryBeyondRangeIsRefused) {
     EXPECT_TRUE(scene->accel->Intersect(Ray(Point3f(0, 0, 0), Vector3f(0, 0, 1)), &si));
 }
 
+TEST(Robustness, InstancesBeyondRangeAreRefused) {
+    // Each shape of the object is within range; the instance's transformation is not.
+    const std::string obj = "WorldBegin\nObjectBegin \"ball\"\nShape \"sphere\"\nObjectEnd\n";
+    EXPECT_ERROR_AT(obj + "AttributeBegin\nScale 1e30 1e30 1e30\nObjectInstance \"ball\"\nAttributeEnd\n",
+                    "test.pbrt:7:1", "ObjectInstance \"ball\": the object reaches");
+    EXPECT_ERROR_AT(obj + "Translate 1e13 0 0\nObjectInstance \"ball\"\n", "test.pbrt:6:1", "beyond the +-1e12");
+    // A projective transformation (one of the two 0.5 lands in the last row, whichever way
+    // the matrix is read): Embree would silently use its affine part.
+    EXPECT_ERROR_AT(obj + "ConcatTransform [ 1 0 0 0  0 1 0 0  0 0 1 0.5  0 0 0.5 1 ]\nObjectInstance \"ball\"\n",
+                    "test.pbrt:6:1", "projective");
+    // Shrunk by 1e-30: the camera's rays would reach 5e30 in the object's space (Embree
+    // aborted on them). Shrunk by 1e-6 in a small scene: fine.
+    EXPECT_ERROR_AT(obj + "Scale 1e-30 1e-30 1e-30\nObjectInstance \"ball\"\n", "test.pbrt:6:1",
+                    "shrinks the object");
+    EXPECT_EQ(LoadError("LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\n" + obj +
+                        "Scale 1e-6 1e-6 1e-6\nObjectInstance \"ball\"\n"),
+              "");
+    // An empty object has nothing to lose: no error.
+    EXPECT_EQ(LoadError("WorldBegin\nObjectBegin \"none\"\nObjectEnd\nScale 1e30 1e30 1e30\n"
+                        "ObjectInstance \"none\"\n"),
+              "");
+    // Big but traceable instances load, and are hit where they are.
+    const std::string far = obj + "Translate 0 0 1e11\nObjectInstance \"ball\"\n";
+    EXPECT_EQ(LoadError(far), "");
+    auto scene = LoadSceneFromString(far, RenderOptions{});
+    SurfaceInteraction si;
+    ASSERT_TRUE(scene->accel->Intersect(Ray(Point3f(0, 0, 0), Vector3f(0, 0, 1)), &si));
+    EXPECT_NEAR(si.tHit, 1e11 - 1, 1e11 * 1e-6);
+}
+
 // --- Directories where files are expected --------------------------------------------------
 
 TEST(Robustness, DirectoriesAreNamedAsSuch) {

@@ -6,7 +6,9 @@
 #include <pbrt/util/paramdict.h>
 #include <pbrt/wavelength_coverage.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -36,6 +38,76 @@ namespace {
 const std::set<std::string> kHarmlessParameters = {"nsamples", "samples"};
 
 std::string ParamName(const ParsedParameter &p) { return "\"" + p.type + " " + p.name + "\""; }
+
+std::string PointText(const Point3f &p) {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "(%g, %g, %g)", double(p.x), double(p.y), double(p.z));
+    return buf;
+}
+
+// An object instance must stay where the ray tracer can intersect it (design §5.5), as every
+// shape must: an affine, finite transformation that keeps the object's bounds within
+// +-kMaxRenderCoordinate. Beyond, Embree's single-precision tests overflow and the instance
+// silently vanishes; a projective transformation would be dropped to its affine part.
+void CheckInstanceRange(const std::string &name, const Transform &renderFromInstance,
+                        const Bounds3f &objectBounds, const FileLoc &loc) {
+    const SquareMatrix4 &m = renderFromInstance.Matrix();
+    const std::string what = "ObjectInstance \"" + name + "\": ";
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c)
+            if (!std::isfinite(m.m[r][c])) throw PbrtError(loc, what + "its transformation is not finite");
+    if (m.m[3][0] != 0 || m.m[3][1] != 0 || m.m[3][2] != 0 || m.m[3][3] != 1)
+        throw PbrtError(loc, what + "its transformation is projective; instances take affine "
+                                    "transformations only (last row 0 0 0 1)");
+    if (objectBounds.IsEmpty()) return;
+    for (int c = 0; c < 8; ++c) {
+        const Point3f corner((c & 1) ? objectBounds.pMax.x : objectBounds.pMin.x,
+                             (c & 2) ? objectBounds.pMax.y : objectBounds.pMin.y,
+                             (c & 4) ? objectBounds.pMax.z : objectBounds.pMin.z);
+        const Point3f w = renderFromInstance.ApplyPoint(corner);
+        if (!WithinRenderRange(w))
+            throw PbrtError(loc, what + "the object reaches " + PointText(w) + " after the "
+                                        "instance's transformation, beyond the +-1e12 the ray "
+                                        "tracer can intersect (it would vanish from the image)");
+    }
+}
+
+// The other way round: Embree intersects an instance in the object's own space, carrying
+// every ray there with the inverse transformation. A transformation that shrinks the object
+// enormously takes the rays of the rest of the scene (its extent: the geometry and the
+// camera) beyond the same range, or beyond what Embree accepts as a ray at all (it aborts).
+void CheckInstanceRays(const std::string &name, const Transform &renderFromInstance,
+                       const Bounds3f &sceneExtent, const FileLoc &loc) {
+    if (sceneExtent.IsEmpty()) return;
+    const Transform instanceFromRender = Inverse(renderFromInstance);
+    // Directions too (Embree checks them like origins): a ray's direction is at most as long
+    // as the scene is wide (shadow rays are not normalized), at least 1.
+    const SquareMatrix4 &inv = instanceFromRender.Matrix();
+    double gain = 0;  // the largest growth of a direction component (max row sum)
+    for (int r = 0; r < 3; ++r)
+        gain = std::max(gain, double(std::abs(inv.m[r][0])) + std::abs(inv.m[r][1]) + std::abs(inv.m[r][2]));
+    const double length = std::max(1.0, double(Length(sceneExtent.Diagonal())));
+    if (!(gain * length <= kMaxRenderCoordinate)) {
+        char buf[160];
+        std::snprintf(buf, sizeof(buf), "ray directions up to %g long (the scene's width) grow to %g",
+                      length, gain * length);
+        throw PbrtError(loc, "ObjectInstance \"" + name + "\": its transformation shrinks the object "
+                             "so much that " + buf + " in the object's own space, beyond the "
+                             "+-1e12 the ray tracer can intersect");
+    }
+    for (int c = 0; c < 8; ++c) {
+        const Point3f corner((c & 1) ? sceneExtent.pMax.x : sceneExtent.pMin.x,
+                             (c & 2) ? sceneExtent.pMax.y : sceneExtent.pMin.y,
+                             (c & 4) ? sceneExtent.pMax.z : sceneExtent.pMin.z);
+        const Point3f w = instanceFromRender.ApplyPoint(corner);
+        if (!WithinRenderRange(w))
+            throw PbrtError(loc, "ObjectInstance \"" + name + "\": its transformation shrinks the "
+                                 "object so much that rays from the rest of the scene (which "
+                                 "reaches " + PointText(corner) + ") lie at " + PointText(w) +
+                                 " in the object's own space, beyond the +-1e12 the ray tracer "
+                                 "can intersect");
+    }
+}
 
 // Every parameter nothing looked up is an error (it may change the picture), unless it is
 // known to be harmless.
@@ -567,9 +639,20 @@ void SceneBuilder::EndOfFiles() {
     for (const PendingInstance &inst : instances) {
         auto it = objects.find(inst.name);
         if (it == objects.end()) throw PbrtError(inst.loc, "ObjectInstance: object \"" + inst.name + "\" is not defined");
+        if (!scene->accel->ObjectIsEmpty(it->second))
+            CheckInstanceRange(inst.name, inst.renderFromInstance, scene->accel->ObjectBounds(it->second),
+                               inst.loc);
         scene->accel->AddInstance(it->second, inst.renderFromInstance);
     }
     scene->accel->Commit();
+    {
+        // Where rays can start: the geometry, and the camera.
+        const Bounds3f extent = Union(scene->accel->Bounds(),
+                                      Inverse(cameraFromWorld).ApplyPoint(Point3f(0, 0, 0)));
+        for (const PendingInstance &inst : instances)
+            if (!scene->accel->ObjectIsEmpty(objects.at(inst.name)))
+                CheckInstanceRays(inst.name, inst.renderFromInstance, extent, inst.loc);
+    }
 
     // Film, camera, sampler, integrator (pbrt-v4 defaults when a directive is absent).
     Desc film = filmDesc ? *filmDesc : Desc{"rgb", {}, FileLoc{}, graphicsState.colorSpace};
