@@ -47,7 +47,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import colorimetry, sampling
+from . import aot, colorimetry, sampling
 
 Array = jax.Array
 
@@ -220,7 +220,7 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     scale = 1.0 / (peak * c[1])
     c = _exact_integral(nodes, spec, cmf)
     c = c / c[1]  # Y exactly 1
-    lab_c = np.asarray(colorimetry.xyz_to_lab(c))
+    lab_c = np.asarray(_xyz_to_lab_jit(c))
 
     # Padding: node arrays continue past hi (never reached) with zero values.
     n_nodes = nodes.size
@@ -240,18 +240,21 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     node_tseg = np.clip(np.searchsorted(grid, nodes_p, side="right") - 1, 0, m - 1)
 
     arrays = {
-        "grid": jnp.asarray(grid),
-        "nodes": jnp.asarray(nodes_p),
-        "spec": jnp.asarray(spec_p),
-        "cmf": jnp.asarray(cmf_p),
-        "bp": jnp.asarray(bp),
-        "bp_seg": jnp.asarray(bp_seg),
-        "bp_t": jnp.asarray(bp_t),
-        "bp_idx": jnp.asarray(bp_idx),
-        "node_tseg": jnp.asarray(node_tseg),
-        "lab_c": jnp.asarray(lab_c),
-        "c": jnp.asarray(c),
+        "grid": np.asarray(grid),
+        "nodes": np.asarray(nodes_p),
+        "spec": np.asarray(spec_p),
+        "cmf": np.asarray(cmf_p),
+        "bp": np.asarray(bp),
+        "bp_seg": np.asarray(bp_seg),
+        "bp_t": np.asarray(bp_t),
+        "bp_idx": np.asarray(bp_idx),
+        "node_tseg": np.asarray(node_tseg),
+        "lab_c": np.asarray(lab_c),
+        "c": np.asarray(c),
     }
+    # One transfer, not jnp.asarray per array (each compiles a staging function per
+    # shape outside a trace: a dozen compilations per process).
+    arrays = jax.device_put(arrays)
     return Problem(
         name=name, source=source, grid=grid, nodes=nodes_p, spec=spec_p, cmf=cmf_p,
         n_nodes=n_nodes, c=c, lab_c=lab_c, scale=scale, arrays=arrays,
@@ -574,24 +577,34 @@ def _penalized(P: Array, arr: dict, glx: Array, glw: Array, var_ref: Array, mu: 
 
 
 # Jitted at the edge (where solvers and reports call in); shapes are fixed per size class.
-penalized_value_and_grad = jax.jit(jax.value_and_grad(_penalized, has_aux=True))
-_table_moments_jit = jax.jit(_table_moments)
-_uniform_moments_jit = jax.jit(_uniform_moments)
+# Their executables are also kept on disk (``aot``) when the compilation cache is on.
+penalized_value_and_grad = aot.DiskJit(jax.jit(jax.value_and_grad(_penalized, has_aux=True)),
+                                       "penalized_value_and_grad")
+_table_moments_jit = aot.DiskJit(jax.jit(_table_moments), "table_moments")
+_uniform_moments_jit = aot.DiskJit(jax.jit(_uniform_moments), "uniform_moments")
+# One compiled function, not a dozen one-operation ones (eager jnp on a NumPy array).
+_xyz_to_lab_jit = aot.DiskJit(jax.jit(colorimetry.xyz_to_lab), "xyz_to_lab")
 
 
 def _moments_at(problem: Problem, P: Array, order: int):
     glx, glw = gauss_legendre(order)
     if order == SEARCH_ORDER:
-        one = jnp.ones(3)
+        one = np.ones(3)
         (_, aux), _ = penalized_value_and_grad(P, problem.arrays, glx, glw, one, 0.0, 0.0)
         return aux
+    if order < ORDER_FINE:
+        # The same compiled function as ORDER_FINE (one compilation fewer per process):
+        # the rule's points repeated with zero weight.
+        reps = -(-ORDER_FINE // order)
+        glx = jax.device_put(np.tile(np.asarray(glx), reps)[:ORDER_FINE])
+        glw = jax.device_put(np.concatenate([np.asarray(glw), np.zeros(ORDER_FINE - order)]))
     return _table_moments_jit(P, problem.arrays, glx, glw)
 
 
 def gauss_legendre(order: int) -> tuple[Array, Array]:
     """Gauss-Legendre nodes and weights on [0, 1]."""
     x, w = np.polynomial.legendre.leggauss(order)
-    return jnp.asarray(0.5 * (x + 1.0)), jnp.asarray(0.5 * w)
+    return jax.device_put(0.5 * (x + 1.0)), jax.device_put(0.5 * w)
 
 
 # --- Public interface ----------------------------------------------------------------
@@ -604,6 +617,8 @@ def enable_compilation_cache() -> str | None:
 
     Compiling the objective and its gradient takes 5-10 s per problem size; with the
     cache a later run (another spectrum, another process) loads them in about a second.
+    The objective's functions are also kept as whole executables (``aot``), which skips
+    tracing and lowering them in a later process.
     The directory is ``$WAVELENGTH_PDF_JAX_CACHE`` if set (empty or ``off`` disables the
     cache), else ``$XDG_CACHE_HOME/wavelength-pdf/jax`` (``~/.cache/...``). The cache only
     holds compiled code: results do not depend on it. Returns the directory, or None.
@@ -623,6 +638,7 @@ def enable_compilation_cache() -> str | None:
     try:
         path.mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", str(path))
+        aot.enable(path / "executables")
         # Every compiled function, however quick to compile: a process compiles ~30.
         jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     except (OSError, AttributeError, ValueError):
