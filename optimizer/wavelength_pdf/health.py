@@ -27,7 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import objective, sampling
+from . import aot, objective, sampling
 from .objective import Problem
 
 #: Largest accepted relative bias of the estimator's mean (design §4).
@@ -138,7 +138,7 @@ def _mean_in_wavelength(arr: dict, P: jax.Array, glx: jax.Array, glw: jax.Array)
     return mean, lost
 
 
-_mean_in_wavelength_jit = jax.jit(_mean_in_wavelength)
+_mean_in_wavelength_jit = aot.DiskJit(jax.jit(_mean_in_wavelength), "mean_in_wavelength")
 
 
 def health(problem: Problem, P) -> Health:

@@ -47,7 +47,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import colorimetry, sampling
+from . import aot, colorimetry, sampling
 
 Array = jax.Array
 
@@ -222,7 +222,7 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     scale = 1.0 / (peak * c[1])
     c = _exact_integral(nodes, spec, cmf)
     c = c / c[1]  # Y exactly 1
-    lab_c = np.asarray(colorimetry.xyz_to_lab(c))
+    lab_c = np.asarray(_xyz_to_lab_jit(c))
 
     # Padding: node arrays continue past hi (never reached) with zero values.
     n_nodes = nodes.size
@@ -242,18 +242,21 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     node_tseg = np.clip(np.searchsorted(grid, nodes_p, side="right") - 1, 0, m - 1)
 
     arrays = {
-        "grid": jnp.asarray(grid),
-        "nodes": jnp.asarray(nodes_p),
-        "spec": jnp.asarray(spec_p),
-        "cmf": jnp.asarray(cmf_p),
-        "bp": jnp.asarray(bp),
-        "bp_seg": jnp.asarray(bp_seg),
-        "bp_t": jnp.asarray(bp_t),
-        "bp_idx": jnp.asarray(bp_idx),
-        "node_tseg": jnp.asarray(node_tseg),
-        "lab_c": jnp.asarray(lab_c),
-        "c": jnp.asarray(c),
+        "grid": np.asarray(grid),
+        "nodes": np.asarray(nodes_p),
+        "spec": np.asarray(spec_p),
+        "cmf": np.asarray(cmf_p),
+        "bp": np.asarray(bp),
+        "bp_seg": np.asarray(bp_seg),
+        "bp_t": np.asarray(bp_t),
+        "bp_idx": np.asarray(bp_idx),
+        "node_tseg": np.asarray(node_tseg),
+        "lab_c": np.asarray(lab_c),
+        "c": np.asarray(c),
     }
+    # One transfer, not jnp.asarray per array (each compiles a staging function per
+    # shape outside a trace: a dozen compilations per process).
+    arrays = jax.device_put(arrays)
     return Problem(
         name=name, source=source, grid=grid, nodes=nodes_p, spec=spec_p, cmf=cmf_p,
         n_nodes=n_nodes, c=c, lab_c=lab_c, scale=scale, arrays=arrays,
@@ -418,46 +421,55 @@ def _table_J(P: Array, arr: dict, glx: Array, glw: Array) -> Array:
 # --- The second moment: diagonal part exactly in wavelength space -----------------------
 
 
+def _powers(x: Array, n: int) -> Array:
+    """x^0 .. x^(n-1) by repeated products, stacked on a new last axis. Cheaper than
+    pow (exp and log per element; this function ran three times slower with it) and with
+    exact derivatives at x = 0 (a power with exponent 0 at base 0 has a NaN derivative)."""
+    out = [jnp.ones_like(x)]
+    for _ in range(n - 1):
+        out.append(out[-1] * x)
+    return jnp.stack(out, axis=-1)
+
+
+_K5 = np.arange(5)
+_BINOM5 = np.array([[1, 0, 0, 0, 0], [1, 1, 0, 0, 0], [1, 2, 1, 0, 0], [1, 3, 3, 1, 0], [1, 4, 6, 4, 1]],
+                   dtype=np.float64) * (_K5[None, :] <= _K5[:, None])  # C(k, i), i <= k
+_EXPO5 = np.clip(_K5[:, None] - _K5[None, :], 0, None)  # k - i
+_INV_I5 = np.where(_K5 > 0, 1.0 / np.maximum(_K5, 1), 0.0)  # 1 / i, 0 for i = 0
+_SERIES_TERMS = 24
+_SERIES = 1.0 / (_K5[None, :] + np.arange(_SERIES_TERMS)[:, None] + 1.0)  # 1 / (k + n + 1)
+
+
 def _quartic_over_linear(e: Array, a: Array, b: Array, h: Array) -> Array:
     """Integral over t in [0, h] of (e0 + e1 t + ... + e4 t^4) / (a + b t), a, b >= 0.
 
     Closed form (log plus polynomial) when b h / a is not small, a power series in
     b t / a when it is (where the closed form cancels), and h^k / (k b) for a = 0 (infinite
     if the numerator does not vanish at t = 0). Elementwise over leading axes; e has a
-    trailing axis of 5.
+    trailing axis of 5. Integer powers are products (``_powers``).
     """
-    k = jnp.arange(5.0)
     a_pos = a > 0
     a_s = jnp.where(a_pos, a, 1.0)
     b_pos = b > 0
     b_s = jnp.where(b_pos, b, 1.0)
     r = b * h / a_s
     small = a_pos & (r <= 0.2)
+    hp = _powers(h, 6)  # h^0 .. h^5
     # Series: I_k = h^(k+1) / a * sum_n (-r)^n / (k + n + 1).
-    n = jnp.arange(24.0)
     r_s = jnp.where(small, r, 0.0)
-    # (-r)^n by repeated products: a power with exponent 0 at base 0 has a NaN derivative.
-    powers = [jnp.ones_like(r_s)]
-    for _ in range(n.size - 1):
-        powers.append(powers[-1] * (-r_s))
-    terms = jnp.stack(powers, axis=-1)[..., None, :] / (k[:, None] + n + 1.0)  # (..., 5, 24)
-    I_series = h[..., None] ** (k + 1.0) / a_s[..., None] * jnp.sum(terms, axis=-1)
+    I_series = hp[..., 1:] / a_s[..., None] * (_powers(-r_s, _SERIES_TERMS) @ _SERIES)
     # Closed form: z = a + b t, I_k = b^-(k+1) [(-a)^k log(z1/z0) + sum_i C(k,i) (-a)^(k-i) (z1^i - z0^i) / i].
     z0 = a_s
     z1 = a_s + b * h
     big = a_pos & ~small
     log_ratio = jnp.log(jnp.where(big, z1 / z0, 2.0))
-    binom = jnp.array([[1, 0, 0, 0, 0], [1, 1, 0, 0, 0], [1, 2, 1, 0, 0], [1, 3, 3, 1, 0], [1, 4, 6, 4, 1]], dtype=a.dtype)
-    i = jnp.arange(5.0)
-    neg_a = -a_s[..., None]
-    # P[..., k, i] = C(k, i) (-a)^(k-i) (z1^i - z0^i) / i  for i >= 1
-    diff_pow = jnp.where(i > 0, (z1[..., None] ** i - z0[..., None] ** i) / jnp.where(i > 0, i, 1.0), 0.0)
-    expo = jnp.clip(k[:, None] - i[None, :], 0.0, None)
-    mat = binom * neg_a[..., None] ** expo * (i[None, :] <= k[:, None])
-    poly = jnp.sum(mat * diff_pow[..., None, :], axis=-1)
-    I_closed = (neg_a ** k * log_ratio[..., None] + poly) / b_s[..., None] ** (k + 1.0)
+    pa = _powers(-a_s, 5)  # (-a)^0 .. (-a)^4
+    diff_pow = (_powers(z1, 5) - _powers(z0, 5)) * _INV_I5  # (z1^i - z0^i) / i
+    poly = jnp.sum(_BINOM5 * pa[..., _EXPO5] * diff_pow[..., None, :], axis=-1)
+    inv_b = 1.0 / b_s
+    I_closed = (pa * log_ratio[..., None] + poly) * _powers(inv_b, 6)[..., 1:]
     # a = 0: the k = 0 term diverges unless e0 = 0.
-    I_zero = jnp.where(k > 0, h[..., None] ** k / jnp.where(k > 0, k, 1.0) / b_s[..., None], 0.0)
+    I_zero = hp[..., :5] * _INV_I5 * inv_b[..., None]
     val_zero = jnp.where(e[..., 0] == 0, jnp.sum(e * I_zero, axis=-1), jnp.inf)
     val_zero = jnp.where(b_pos, val_zero, jnp.where(jnp.all(e == 0, axis=-1), 0.0, jnp.inf))
     I = jnp.where(small[..., None], I_series, I_closed)
@@ -567,24 +579,34 @@ def _penalized(P: Array, arr: dict, glx: Array, glw: Array, var_ref: Array, mu: 
 
 
 # Jitted at the edge (where solvers and reports call in); shapes are fixed per size class.
-penalized_value_and_grad = jax.jit(jax.value_and_grad(_penalized, has_aux=True))
-_table_moments_jit = jax.jit(_table_moments)
-_uniform_moments_jit = jax.jit(_uniform_moments)
+# Their executables are also kept on disk (``aot``) when the compilation cache is on.
+penalized_value_and_grad = aot.DiskJit(jax.jit(jax.value_and_grad(_penalized, has_aux=True)),
+                                       "penalized_value_and_grad")
+_table_moments_jit = aot.DiskJit(jax.jit(_table_moments), "table_moments")
+_uniform_moments_jit = aot.DiskJit(jax.jit(_uniform_moments), "uniform_moments")
+# One compiled function, not a dozen one-operation ones (eager jnp on a NumPy array).
+_xyz_to_lab_jit = aot.DiskJit(jax.jit(colorimetry.xyz_to_lab), "xyz_to_lab")
 
 
 def _moments_at(problem: Problem, P: Array, order: int):
     glx, glw = gauss_legendre(order)
     if order == SEARCH_ORDER:
-        one = jnp.ones(3)
+        one = np.ones(3)
         (_, aux), _ = penalized_value_and_grad(P, problem.arrays, glx, glw, one, 0.0, 0.0)
         return aux
+    if order < ORDER_FINE:
+        # The same compiled function as ORDER_FINE (one compilation fewer per process):
+        # the rule's points repeated with zero weight.
+        reps = -(-ORDER_FINE // order)
+        glx = jax.device_put(np.tile(np.asarray(glx), reps)[:ORDER_FINE])
+        glw = jax.device_put(np.concatenate([np.asarray(glw), np.zeros(ORDER_FINE - order)]))
     return _table_moments_jit(P, problem.arrays, glx, glw)
 
 
 def gauss_legendre(order: int) -> tuple[Array, Array]:
     """Gauss-Legendre nodes and weights on [0, 1]."""
     x, w = np.polynomial.legendre.leggauss(order)
-    return jnp.asarray(0.5 * (x + 1.0)), jnp.asarray(0.5 * w)
+    return jax.device_put(0.5 * (x + 1.0)), jax.device_put(0.5 * w)
 
 
 # --- Public interface ----------------------------------------------------------------
@@ -597,6 +619,8 @@ def enable_compilation_cache() -> str | None:
 
     Compiling the objective and its gradient takes 5-10 s per problem size; with the
     cache a later run (another spectrum, another process) loads them in about a second.
+    The objective's functions are also kept as whole executables (``aot``), which skips
+    tracing and lowering them in a later process.
     The directory is ``$WAVELENGTH_PDF_JAX_CACHE`` if set (empty or ``off`` disables the
     cache), else ``$XDG_CACHE_HOME/wavelength-pdf/jax`` (``~/.cache/...``). The cache only
     holds compiled code: results do not depend on it. Returns the directory, or None.
@@ -616,6 +640,7 @@ def enable_compilation_cache() -> str | None:
     try:
         path.mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", str(path))
+        aot.enable(path / "executables")
         # Every compiled function, however quick to compile: a process compiles ~30.
         jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     except (OSError, AttributeError, ValueError):

@@ -46,6 +46,7 @@ import jax.numpy as jnp
 import numpy as np
 import scipy.optimize
 
+from . import aot
 from . import health as health_mod
 from . import init as init_mod
 from . import objective
@@ -98,6 +99,12 @@ class SolverResult:
     history: list[float] = field(default_factory=list)
     nfev: int = 0
     message: str = ""
+
+
+def _put(x) -> jax.Array:
+    """A float64 NumPy vector on the device: a plain transfer (jnp.asarray compiles a
+    staging function per shape outside a trace)."""
+    return jax.device_put(np.asarray(x, dtype=np.float64))
 
 
 class _OutOfBudget(Exception):
@@ -159,12 +166,12 @@ PARAMETERIZATIONS = {
 }
 
 
-@partial(jax.jit, static_argnames=("name",))
+@partial(aot.disk_jit, static_argnames=("name",))
 def _to_P(x, E, s, mask, dg, name):
     return PARAMETERIZATIONS[name].to_P(x, E, s, mask, dg)
 
 
-@partial(jax.jit, static_argnames=("name",))
+@partial(aot.disk_jit, static_argnames=("name",))
 def _to_V(x, E, s, mask, dg, name):
     """Node values on the level grid (normalization aside) of parameters x."""
     if name == "values":
@@ -173,7 +180,7 @@ def _to_V(x, E, s, mask, dg, name):
     return jnp.exp(th - jnp.max(th, axis=1, keepdims=True))
 
 
-@partial(jax.jit, static_argnames=("name",))
+@partial(aot.disk_jit, static_argnames=("name",))
 def _pull_back(x, E, s, mask, dg, gP, name):
     _, vjp = jax.vjp(lambda y: PARAMETERIZATIONS[name].to_P(y, E, s, mask, dg), x)
     return vjp(gP)[0]
@@ -229,9 +236,9 @@ class _Context:
         self.order = objective.SEARCH_ORDER if search_order is None else search_order
         self.glx, self.glw = objective.gauss_legendre(self.order)
         s = init_mod.support_density(problem)
-        self.s = jnp.asarray(s)
+        self.s = jax.device_put(s)
         self.support = s > 0
-        self.dg = jnp.asarray(np.diff(problem.grid))
+        self.dg = jax.device_put(np.diff(problem.grid))
         self.health_init = health_mod.health(problem, P_init)
         # The penalty compares variances on the search problem, the acceptance on the
         # exact one (``health_init``).
@@ -251,7 +258,7 @@ class _Context:
         _, m1, m2 = objective.moments(self.search, P, self.order)
         c = self.search.c
         var = np.maximum(m2 - (m1 - c) ** 2, 0.0)
-        return jnp.asarray(np.maximum(var, 1e-24 * c**2 + 1e-300))
+        return jax.device_put(np.maximum(var, 1e-24 * c**2 + 1e-300))
 
     def level(self, stride: int) -> Level:
         return self.fine if stride == 1 else make_level(self.problem.grid, self.support, stride)
@@ -268,7 +275,7 @@ class _Context:
     def _j(self, level: Level):
         key = level.stride
         if key not in self._jlevels:
-            self._jlevels[key] = (jnp.asarray(level.E), jnp.asarray(level.mask))
+            self._jlevels[key] = (jax.device_put(level.E), jax.device_put(level.mask))
         return self._jlevels[key]
 
     def out_of_budget(self) -> bool:
@@ -280,11 +287,11 @@ class _Context:
 
     def table(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
         E, mask = self._j(level)
-        return np.asarray(_to_P(jnp.asarray(x), E, self.s, mask, self.dg, name))
+        return np.asarray(_to_P(_put(x), E, self.s, mask, self.dg, name))
 
     def values(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
         E, mask = self._j(level)
-        return np.asarray(_to_V(jnp.asarray(x), E, self.s, mask, self.dg, name))
+        return np.asarray(_to_V(_put(x), E, self.s, mask, self.dg, name))
 
     def bounds(self, level: Level, name: str):
         if not PARAMETERIZATIONS[name].bounded:
@@ -307,7 +314,7 @@ class _Context:
         def f(x: np.ndarray):
             if self.out_of_budget():
                 raise _OutOfBudget
-            xj = jnp.asarray(x, dtype=jnp.float64)
+            xj = _put(x)
             P = _to_P(xj, E, self.s, mask, self.dg, name)
             val, J, gP = self.evaluate(P, var_ref)
             g = np.asarray(_pull_back(xj, E, self.s, mask, self.dg, gP, name), dtype=np.float64)

@@ -1,0 +1,188 @@
+"""Compiled objectives kept on disk as executables, so that a new process skips tracing
+and lowering them.
+
+JAX's persistent compilation cache (``objective.enable_compilation_cache``) saves XLA's
+compilation, but every process still traces each jitted function to a jaxpr, lowers it to
+StableHLO and hashes the module to find it in the cache: for the objective, its gradient
+and the report functions that is 2-3 s of CPU per process, a third of a short
+``wavelength-pdf optimize`` run. :class:`DiskJit` wraps a jitted function and keeps, per
+argument signature, the compiled executable itself (``jax.experimental.serialize_executable``)
+in ``<cache>/executables``; a later process loads it and calls it directly.
+
+The file name is a hash of the function's name, the argument signature (pytree structure,
+shapes, dtypes, weak types, static arguments) and everything the compiled code depends on:
+the package's source files, the JAX and jaxlib versions, Python's version, ``XLA_FLAGS``
+and the CPU. The executable is the one a plain ``jax.jit`` call would run, so results are
+the same with or without this cache. Anything that goes wrong (no cache directory, a file
+that does not load or does not run, arguments being traced by an outer jit) falls back to
+the plain jitted function; a file that does not load or run is deleted.
+
+Only the user's own cache directory is read: the files are pickles, like the executables
+in JAX's own cache, and must not come from anyone else.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import os
+import pickle
+import platform
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any, Callable
+
+import jax
+
+_dir: Path | None = None
+_env_key: str | None = None
+
+
+def enable(path: str | os.PathLike | None) -> None:
+    """Keep executables in ``path`` (None: do not keep them)."""
+    global _dir
+    if path is None:
+        _dir = None
+        return
+    p = Path(path)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        _dir = None
+        return
+    _dir = p
+
+
+def _cpu_key() -> str:
+    """What the host CPU supports (compiled code may use any of it)."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith(("flags", "Features")):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def environment_key() -> str:
+    """Hash of everything besides the arguments that the compiled code depends on."""
+    global _env_key
+    if _env_key is None:
+        import jaxlib
+
+        h = hashlib.sha256()
+        pkg = Path(__file__).resolve().parent
+        for f in sorted(pkg.rglob("*.py")):
+            h.update(f.relative_to(pkg).as_posix().encode())
+            h.update(f.read_bytes())
+        for part in (jax.__version__, getattr(jaxlib, "__version__", ""), sys.version,
+                     platform.machine(), os.environ.get("XLA_FLAGS", ""), _cpu_key(),
+                     str(jax.config.jax_enable_x64)):
+            h.update(b"\0" + str(part).encode())
+        _env_key = h.hexdigest()
+    return _env_key
+
+
+def _leaf_signature(x: Any):
+    if isinstance(x, jax.core.Tracer):
+        raise TypeError("traced")
+    if hasattr(x, "shape") and hasattr(x, "dtype"):
+        return (tuple(x.shape), str(x.dtype), bool(getattr(x, "weak_type", False)))
+    if isinstance(x, (bool, int, float, complex)):
+        return type(x).__name__
+    raise TypeError(f"unsupported argument {type(x).__name__}")
+
+
+class DiskJit:
+    """A jitted function whose executables are also kept on disk (see the module)."""
+
+    def __init__(self, jitted: Callable, name: str, fn: Callable | None = None,
+                 static_argnames: tuple[str, ...] = ()):
+        self.jitted = jitted
+        self.name = name
+        self._compiled: dict = {}
+        self.__wrapped__ = jitted
+        self._static = tuple(static_argnames)
+        self._signature = inspect.signature(fn) if self._static else None
+
+    def __call__(self, *args, **static):
+        if _dir is None:
+            return self.jitted(*args, **static)
+        if self._static:
+            # Static arguments given by position become keywords (they are part of the
+            # signature, not arguments of the executable).
+            bound = self._signature.bind(*args, **static)
+            static = {k: v for k, v in bound.arguments.items() if k in self._static}
+            args = tuple(v for k, v in bound.arguments.items() if k not in self._static)
+        try:
+            leaves, tree = jax.tree_util.tree_flatten(args)
+            sig = (str(tree), tuple(_leaf_signature(x) for x in leaves), tuple(sorted(static.items())))
+        except TypeError:
+            return self.jitted(*args, **static)
+        fn = self._compiled.get(sig)
+        if fn is None:
+            fn = self._load_or_compile(sig, args, static)
+            self._compiled[sig] = fn
+        return fn(*args)
+
+    def _path(self, sig) -> Path:
+        key = hashlib.sha256(repr((self.name, sig, environment_key())).encode()).hexdigest()[:40]
+        return _dir / f"{self.name}-{key}.pkl"
+
+    def _load(self, path: Path, args):
+        from jax.experimental import serialize_executable
+
+        blob, in_tree, out_tree = pickle.loads(path.read_bytes())
+        compiled = serialize_executable.deserialize_and_load(blob, in_tree, out_tree)
+        jax.block_until_ready(compiled(*args))  # fails here, not later, if it cannot run
+        return compiled
+
+    def _load_or_compile(self, sig, args, static):
+        path = self._path(sig)
+        if path.is_file():
+            try:
+                return self._load(path, args)
+            except Exception:  # any unreadable or unrunnable file: recompile
+                path.unlink(missing_ok=True)
+        compiled = _compile_fresh(self.jitted.lower(*args, **static))
+        try:
+            from jax.experimental import serialize_executable
+
+            data = pickle.dumps(serialize_executable.serialize(compiled))
+            fd, tmp = tempfile.mkstemp(dir=_dir, prefix=".tmp-")
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+            try:
+                self._load(Path(tmp), args)  # keep only what loads and runs
+                os.replace(tmp, path)
+            finally:
+                Path(tmp).unlink(missing_ok=True)
+        except Exception:  # not serializable here: this process uses it all the same
+            pass
+        return compiled
+
+
+def _compile_fresh(lowered):
+    """Compile without JAX's persistent cache: an executable JAX loaded from its cache
+    serializes into one that does not run (XLA:CPU, jax 0.10: "Function ... not found")."""
+    try:
+        from jax.experimental.compilation_cache import compilation_cache as cc
+
+        was = bool(jax.config.jax_enable_compilation_cache)
+    except Exception:
+        return lowered.compile()
+    try:
+        jax.config.update("jax_enable_compilation_cache", False)
+        cc.reset_cache()
+        return lowered.compile()
+    finally:
+        jax.config.update("jax_enable_compilation_cache", was)
+        cc.reset_cache()
+
+
+def disk_jit(fn: Callable, **jit_kwargs) -> DiskJit:
+    """``jax.jit(fn, **jit_kwargs)`` with executables kept on disk (a decorator)."""
+    return DiskJit(jax.jit(fn, **jit_kwargs), fn.__name__.lstrip("_"), fn,
+                   tuple(jit_kwargs.get("static_argnames", ())))
