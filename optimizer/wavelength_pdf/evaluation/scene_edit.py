@@ -31,6 +31,10 @@ _WITH_PARAMS = {d: 1 for d in ("Shape", "LightSource", "AreaLightSource", "Mater
 _WITH_PARAMS["Texture"] = 3
 
 
+#: Values below this fraction of the peak are written as 0 into a scene (design §3.3).
+SCENE_FLOOR = 1e-30
+
+
 def inline_spectrum(spectrum: Spectrum, lo: float, hi: float) -> str:
     """``[ lambda value ... ]`` of a spectrum cut to [lo, hi] (exact at lo and hi)."""
     lam = spectrum.wavelengths
@@ -39,6 +43,9 @@ def inline_spectrum(spectrum: Spectrum, lo: float, hi: float) -> str:
     values = np.interp(grid, lam, spectrum.values, left=0.0, right=0.0)
     if not np.any(values > 0):
         raise SpectrumError(f"{spectrum.source}: no energy inside {lo:g}-{hi:g} nm")
+    # The renderer reads single precision: values below 1e-30 of the peak (a Gaussian line's
+    # far tails) would underflow there, and change nothing (design §3.3).
+    values = np.where(values < values.max() * SCENE_FLOOR, 0.0, values)
     return "[ " + " ".join(f"{w:.10g} {v:.10g}" for w, v in zip(grid, values)) + " ]"
 
 
