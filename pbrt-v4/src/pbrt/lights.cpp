@@ -108,7 +108,11 @@ Float Light::Power() const {
 }
 
 std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Point2f u,
-                                             const SampledWavelengths &lambda) const {
+                                             const SampledWavelengths &lambda,
+                                             SampledSpectrumCache *cache) const {
+    auto emission = [&]() -> SampledSpectrum {
+        return cache ? cache->Get(*spectrum, lambda) : spectrum->Sample(lambda);
+    };
     LightLiSample ls;
     switch (type) {
     case LightType::Point:
@@ -123,21 +127,21 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             falloff = SmoothStep(wl.z, cosFalloffEnd, cosFalloffStart);
             if (falloff == 0) return std::nullopt;
         }
-        ls.L = spectrum->Sample(lambda) * (scale * falloff / d2);
+        ls.L = emission() * (scale * falloff / d2);
         ls.pdf = 1;
         ls.pLight = position;
         return ls;
     }
     case LightType::Distant:
         ls.wi = wLight;
-        ls.L = spectrum->Sample(lambda) * scale;
+        ls.L = emission() * scale;
         ls.pdf = 1;
         ls.pLight = ctx.p + wLight * (2 * sceneRadius);
         return ls;
     case LightType::UniformInfinite: {
         ls.wi = SampleUniformSphere(u);
         ls.pdf = UniformSpherePDF();
-        ls.L = spectrum->Sample(lambda) * scale;
+        ls.L = emission() * scale;
         ls.pLight = ctx.p + ls.wi * (2 * sceneRadius);
         return ls;
     }
@@ -148,7 +152,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
     SurfaceInteraction s;
     if (mesh) {
         auto b = SampleUniformTriangle(u);
-        mesh->Interaction(size_t(triangle), b[1], b[2], &s);
+        mesh->SurfacePoint(size_t(triangle), b[1], b[2], &s.p, &s.pError, &s.n);
     } else {
         Point3f c = sphere->renderFromObject.ApplyPoint(Point3f(0, 0, 0));
         Float R = sphere->radius * sphereScale;
@@ -169,7 +173,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             Point3f pObj = sphere->objectFromRender.ApplyPoint(ctx.p + ls.wi * t);
             sphere->Interaction(pObj, &s);
             ls.pdf = 1 / (2 * Pi * oneMinusCosMax);
-            ls.L = L(s.n, -ls.wi, lambda);
+            ls.L = L(s.n, -ls.wi, lambda, cache);
             if (!ls.L.IsNonZero()) return std::nullopt;
             ls.pLight = s.p;
             ls.nLight = s.n;
@@ -189,7 +193,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
     Float cosLight = AbsDot(s.n, ls.wi);
     if (cosLight == 0) return std::nullopt;
     ls.pdf = d2 / (area * cosLight);
-    ls.L = L(s.n, -ls.wi, lambda);
+    ls.L = L(s.n, -ls.wi, lambda, cache);
     if (!ls.L.IsNonZero() || !std::isfinite(ls.pdf)) return std::nullopt;
     ls.pLight = s.p;
     ls.nLight = s.n;

@@ -64,6 +64,7 @@ class Sampler {
     uint64_t seed = 0, pixelHash = 0;
     Point2i pixel;
     int sampleIndex = 0, dimension = 0;
+    uint32_t reversedIndex = 0;  // the bit-reversed sample index (Sobol)
     RNG rng;
 };
 

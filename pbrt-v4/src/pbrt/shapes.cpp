@@ -50,6 +50,22 @@ Normal3f TriangleMesh::GeometricNormal(size_t tri) const {
     return n;
 }
 
+void TriangleMesh::SurfacePoint(size_t tri, Float b1, Float b2, Point3f *pOut, Vector3f *pError,
+                                Normal3f *nOut) const {
+    // Every line as in Interaction below, so that both give the same numbers.
+    uint32_t i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
+    const Point3f &p0 = p[i0], &p1 = p[i1], &p2 = p[i2];
+    Float b0 = 1 - b1 - b2;
+    *pOut = p0 * b0 + p1 * b1 + p2 * b2;
+    Float m = MaxComponent(Abs(p0 * b0) + Abs(p1 * b1) + Abs(p2 * b2)) * kPointErrorScale;
+    *pError = Vector3f(m, m, m);
+    *nOut = GeometricNormal(tri);
+    if (!n.empty()) {
+        Normal3f ns = n[i0] * b0 + n[i1] * b1 + n[i2] * b2;
+        if (LengthSquared(ns) > 0) *nOut = FaceForward(*nOut, Normalize(ns));
+    }
+}
+
 void TriangleMesh::Interaction(size_t tri, Float b1, Float b2, SurfaceInteraction *si) const {
     uint32_t i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
     const Point3f &p0 = p[i0], &p1 = p[i1], &p2 = p[i2];

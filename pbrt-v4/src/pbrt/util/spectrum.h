@@ -190,6 +190,30 @@ class Spectrum {
 };
 using SpectrumHandle = std::shared_ptr<const Spectrum>;
 
+// The values of a few spectra at one set of wavelengths, remembered: a path evaluates its
+// emitters' spectra at the same four wavelengths at every vertex (next-event estimation,
+// emission hits), and a tabulated spectrum costs a search per wavelength. The owner must
+// Clear() it whenever the wavelengths change. The values are those of Spectrum::Sample.
+class SampledSpectrumCache {
+  public:
+    void Clear() { keys.fill(nullptr); }
+    const SampledSpectrum &Get(const Spectrum &s, const SampledWavelengths &lambda) {
+        for (int i = 0; i < kSize; ++i)
+            if (keys[i] == &s) return values[i];
+        int i = next;
+        next = (next + 1) % kSize;
+        keys[i] = &s;
+        values[i] = s.Sample(lambda);
+        return values[i];
+    }
+
+  private:
+    static constexpr int kSize = 4;
+    std::array<const Spectrum *, kSize> keys{};
+    std::array<SampledSpectrum, kSize> values;
+    int next = 0;
+};
+
 // c at every wavelength.
 class ConstantSpectrum : public Spectrum {
   public:
