@@ -100,10 +100,12 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         }
 
         // "interface" surfaces: continue through without counting a bounce.
-        std::optional<BSDF> bsdf;
+        // Initialized, not assigned: the BSDF is built in place (no copy of its variant).
+        bool wasTerminated = lambda.SecondaryTerminated();
+        std::optional<BSDF> bsdf = si.material >= 0
+            ? GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); })
+            : std::nullopt;
         if (si.material >= 0) {
-            bool wasTerminated = lambda.SecondaryTerminated();
-            bsdf = GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); });
             // Dispersion kept one wavelength: the other slots no longer count (their pdf is
             // 0); zero their throughput so that they cannot steer Russian roulette.
             if (!wasTerminated && lambda.SecondaryTerminated()) {

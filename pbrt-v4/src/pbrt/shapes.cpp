@@ -41,7 +41,14 @@ Bounds3f TriangleMesh::Bounds() const {
     return b;
 }
 
-Normal3f TriangleMesh::GeometricNormal(size_t tri) const {
+void TriangleMesh::PrecomputeFaceNormals() {
+    faceNormals.clear();
+    std::vector<Normal3f> normals(NumTriangles());
+    for (size_t t = 0; t < normals.size(); ++t) normals[t] = ComputeGeometricNormal(t);
+    faceNormals = std::move(normals);
+}
+
+Normal3f TriangleMesh::ComputeGeometricNormal(size_t tri) const {
     auto v = Vertices(tri);
     Vector3f c = Cross(v[0] - v[2], v[1] - v[2]);
     Float len = Length(c);
