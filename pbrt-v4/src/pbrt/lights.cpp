@@ -54,13 +54,28 @@ IndexedPiecewiseLinearSpectrum::IndexedPiecewiseLinearSpectrum(const PiecewiseLi
         Float lo = lambda0 + Float(b) - 1;
         bucketStart[b] = uint32_t(std::upper_bound(lambdas.begin(), lambdas.end(), lo) - lambdas.begin());
     }
+    if (lambdas.size() >= 2) {
+        Float step = lambdas[1] - lambdas[0];
+        bool even = step > 0;
+        for (size_t i = 0; even && i < lambdas.size(); ++i)
+            even = std::abs(lambdas[i] - (lambdas[0] + Float(i) * step)) <= 1e-3f * step;
+        if (even) uniformStep = step;
+    }
 }
 
 Float IndexedPiecewiseLinearSpectrum::operator()(Float lambda) const {
     // The same result as PiecewiseLinearSpectrum::operator(), without a binary search.
     if (!(lambda >= lambdas.front() && lambda <= lambdas.back())) return 0;
-    size_t b = std::min(size_t(lambda - lambda0), bucketStart.size() - 1);
-    size_t i = bucketStart[b], n = lambdas.size();
+    size_t i, n = lambdas.size();
+    if (uniformStep > 0) {
+        // Evenly spaced nodes (the usual tabulation): the node is where the arithmetic says,
+        // give or take one for rounding, which the two loops settle.
+        i = std::min(size_t((lambda - lambdas.front()) / uniformStep) + 1, n);
+        while (i > 0 && lambdas[i - 1] > lambda) --i;
+    } else {
+        size_t b = std::min(size_t(lambda - lambda0), bucketStart.size() - 1);
+        i = bucketStart[b];
+    }
     while (i < n && lambdas[i] <= lambda) ++i;  // first node above lambda
     if (i >= n) return values.back();
     if (i == 0) return values.front();

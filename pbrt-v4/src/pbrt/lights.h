@@ -133,6 +133,7 @@ class IndexedPiecewiseLinearSpectrum : public Spectrum {
     std::vector<Float> lambdas, values;
     std::vector<uint32_t> bucketStart;
     Float lambda0 = 0;
+    Float uniformStep = 0;  // the spacing when the nodes are evenly spaced (else 0)
 };
 SpectrumHandle FastLookup(SpectrumHandle s);
 

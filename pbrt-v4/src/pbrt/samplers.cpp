@@ -139,6 +139,13 @@ Sampler::Sampler(SamplerType type, int samplesPerPixel, uint64_t seed, int xSamp
     if (spp < 1) throw PbrtError("the number of samples per pixel must be at least 1");
     if (type == SamplerType::Stratified && xSamples * ySamples != spp)
         throw PbrtError("stratified sampler: xsamples * ysamples must equal the pixel samples");
+    constexpr int kMaxJumps = 1 << 16;  // 1 MB; beyond, StartPixelSample advances step by step
+    if ((type == SamplerType::Independent || (type == SamplerType::Stratified && jitter)) &&
+        spp <= kMaxJumps) {
+        auto table = std::make_shared<std::vector<RNG::Jump>>(size_t(spp));
+        for (int i = 0; i < spp; ++i) (*table)[size_t(i)] = RNG::JumpFor(int64_t(i) << 20);
+        jumps = std::move(table);
+    }
 }
 
 std::string Sampler::Description() const {
@@ -161,7 +168,10 @@ void Sampler::StartPixelSample(Point2i p, int index, int dim) {
     {
         // One PCG32 stream per pixel; sample i starts 2^20 draws after sample i - 1.
         rng.SetSequence(pixelHash, 0);
-        rng.Advance(int64_t(index) << 20);
+        if (jumps && index >= 0 && size_t(index) < jumps->size())
+            rng.Advance((*jumps)[size_t(index)]);
+        else
+            rng.Advance(int64_t(index) << 20);
     }
 }
 

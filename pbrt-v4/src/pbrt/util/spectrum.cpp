@@ -176,11 +176,8 @@ DenselySampledSpectrum::DenselySampledSpectrum(std::vector<Float> v) : values(st
 
 Float DenselySampledSpectrum::operator()(Float lambda) const {
     // The nearest nanometre (pbrt-v4 rounds the same way: std::lround, halves away from 0).
-    if (!(lambda >= Lambda_min - 0.5f && lambda < Lambda_max + 0.5f)) return 0;
-    // lround without the library call: lambda >= 359.5 here, and lambda + 0.5 is exact in
-    // double, so truncation rounds halves away from 0 as lround does.
-    int i = int(double(lambda) + 0.5) - int(Lambda_min);
-    return values[std::clamp(i, 0, kNumSamples - 1)];
+    int i = Index(lambda);
+    return i < 0 ? 0 : values[i];
 }
 
 SampledSpectrum DenselySampledSpectrum::Sample(const SampledWavelengths &lambda) const {

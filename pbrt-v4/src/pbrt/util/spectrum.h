@@ -246,6 +246,14 @@ class DenselySampledSpectrum : public Spectrum {
     std::string ToString() const override;
     // The value at integer wavelength Lambda_min + i.
     Float At(int i) const { return values[i]; }
+    // The sample operator() reads at lambda (the nearest nanometre), or -1 where it is 0.
+    static int Index(Float lambda) {
+        if (!(lambda >= Lambda_min - 0.5f && lambda < Lambda_max + 0.5f)) return -1;
+        // lround without the library call: lambda >= 359.5 here, and lambda + 0.5 is exact
+        // in double, so truncation rounds halves away from 0 as lround does.
+        int i = int(double(lambda) + 0.5) - int(Lambda_min);
+        return std::clamp(i, 0, kNumSamples - 1);
+    }
 
   private:
     std::vector<Float> values;
