@@ -16,6 +16,21 @@ paths = pixels x spp. The renderers alternate, ``--reps`` times; the medians are
 Scenes written for "bdpt" render with bdpt in upstream and with path in this ``pbrt`` (its
 documented difference); those rows say so.
 
+Then the Mitsuba cross-check box: the project's Cornell box (``scenes/cornell-box/scene.pbrt``
+and its Mitsuba 3 twin ``scene.xml``: the same room, reflectances, camera and tri-band lamp)
+at 256x256 and ``--box-spp`` (default 256), rendered alternately by this ``pbrt`` (2 threads)
+and by Mitsuba 3 ``llvm_ad_spectral`` (Dr.Jit's thread pool, one thread per core; the LLVM
+library from ``wavelength_pdf.mitsuba.llvm``, i.e. Debian's libllvm19 through
+``DRJIT_LIBLLVM_PATH``), each in its own process, whose whole CPU time (user + system:
+loading, Mitsuba's kernel compilation and Python start-up included) is what counts, as a
+user waiting for the picture would count it. Depth is matched by convention: pbrt's
+``maxdepth 5`` counts scattering events, so its longest path has 6 segments including the
+camera ray, which is Mitsuba's ``max_depth 6`` (Mitsuba counts segments; 1 is emitters seen
+directly). Both keep their default Russian roulette (pbrt-v4's from the second bounce;
+Mitsuba's from depth ``rr_depth`` 5), so Mitsuba traces at least as many segments per path.
+Mitsuba renders in passes of at most 64 spp from one loaded scene. Skipped (and said so)
+when Mitsuba or its LLVM is missing.
+
 With the patched upstream binary (also built by the check script) it then prints what the
 table costs there: the Cornell box rendered alternately with visible sampling (upstream's
 default) and with ``--wavelength-pdf TABLE``, one thread, the CPU time of the whole process
@@ -26,7 +41,8 @@ A scene or binary that is missing or fails is listed with the reason; the exit s
 
 Usage: scripts/bench_renderer.py [--pbrt build/pbrt] [--upstream U] [--patched P]
            [--table T] [--spp 8] [--reps 3] [--cost-reps 7] [--cost-spp 32]
-           [--scenes NAME ...] [--shared ../shared]
+           [--scenes NAME ...] [--shared ../shared] [--box-spp 256] [--box-reps 2]
+           [--no-mitsuba] [--no-cost]
 """
 from __future__ import annotations
 
@@ -49,6 +65,30 @@ SCENES = ("cornell-box", "veach-mis", "teapot", "veach-bidir", "staircase", "gla
 SIZE = (256, 256)
 MAXDEPTH = 5
 TARGET_RATIO = 0.98  # a table costs at most 2% per path
+BOX_PBRT = ROOT / "scenes" / "cornell-box" / "scene.pbrt"  # 256x256, maxdepth 5
+BOX_XML = ROOT / "scenes" / "cornell-box" / "scene.xml"
+MITSUBA_VARIANT = "llvm_ad_spectral"
+MITSUBA_MAX_DEPTH = MAXDEPTH + 1  # Mitsuba counts the camera segment (see above)
+MITSUBA_PASS_SPP = 64
+# The Mitsuba render, run in its own process so that its CPU time is measured alone.
+MITSUBA_WORKER = r"""
+import sys
+sys.path.insert(0, sys.argv[1])
+import wavelength_pdf.mitsuba.llvm as llvm
+llvm.ensure_llvm_path()  # before the llvm backend starts
+import mitsuba as mi
+mi.set_variant(sys.argv[2])
+xml, spp, per_pass, depth = sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), sys.argv[6]
+scene = mi.load_file(xml, width="256", height="256", max_depth=depth, spp=str(per_pass))
+done = 0
+while done < spp:
+    n = min(per_pass, spp - done)
+    img = mi.render(scene, spp=n, seed=done)
+    done += n
+import drjit as dr
+dr.eval(img)
+dr.sync_thread()
+"""
 
 
 class BenchError(RuntimeError):
@@ -97,6 +137,65 @@ def throughput(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[
     return paths / (c3 - c1) * 1e-6
 
 
+def child_cpu(cmd: list[str], what: str) -> float:
+    """Whole-process CPU seconds (user + system) of a child process; BenchError if it fails."""
+    before = os.times()
+    proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    after = os.times()
+    if proc.returncode != 0:
+        lines = [line for line in proc.stderr.splitlines() if line.strip()]
+        raise BenchError(f"{what}: exit {proc.returncode}: {lines[-1] if lines else ''}")
+    return (after.children_user - before.children_user) + (after.children_system - before.children_system)
+
+
+def mitsuba_available() -> str | None:
+    """None when Mitsuba 3 with an LLVM for its llvm variants can run, else the reason."""
+    proc = subprocess.run([sys.executable, "-c", MITSUBA_WORKER.split("xml, spp")[0]
+                           + "print(mi.variant())\n", str(ROOT / "optimizer"), MITSUBA_VARIANT],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if proc.returncode != 0:
+        lines = [line for line in proc.stderr.splitlines() if line.strip()]
+        return lines[-1] if lines else f"exit {proc.returncode}"
+    return None
+
+
+def crosscheck_box(pbrt: pathlib.Path, spp: int, reps: int, nthreads: int, tmp: pathlib.Path,
+                   mitsuba: bool) -> bool:
+    """The Mitsuba cross-check box: whole-process CPU seconds of pbrt and Mitsuba, alternating."""
+    paths = SIZE[0] * SIZE[1] * spp
+    print(f"\nMitsuba cross-check box ({BOX_PBRT.relative_to(ROOT)} / {BOX_XML.name}): "
+          f"{SIZE[0]}x{SIZE[1]}, {spp} spp, pbrt maxdepth {MAXDEPTH} = Mitsuba max_depth "
+          f"{MITSUBA_MAX_DEPTH}, default Russian roulette; whole-process CPU seconds, "
+          f"{reps} alternating reps", flush=True)
+    runners = {"this pbrt": lambda: child_cpu(
+        [str(pbrt), "--quiet", "--spp", str(spp), "--seed", "1", "--nthreads", str(nthreads),
+         "--outfile", str(tmp / "box.exr"), str(BOX_PBRT)], "pbrt")}
+    if mitsuba:
+        reason = mitsuba_available()
+        if reason:
+            print(f"  Mitsuba {MITSUBA_VARIANT} not measured: {reason}")
+        else:
+            runners[f"mitsuba {MITSUBA_VARIANT}"] = lambda: child_cpu(
+                [sys.executable, "-c", MITSUBA_WORKER, str(ROOT / "optimizer"), MITSUBA_VARIANT,
+                 str(BOX_XML), str(spp), str(MITSUBA_PASS_SPP), str(MITSUBA_MAX_DEPTH)], "mitsuba")
+    cpu: dict[str, list[float]] = {r: [] for r in runners}
+    try:
+        for rep in range(reps):
+            for r in (list(runners) if rep % 2 == 0 else list(reversed(runners))):
+                cpu[r].append(runners[r]())
+    except BenchError as e:
+        print(f"  failed: {e}")
+        return False
+    med = {r: statistics.median(v) for r, v in cpu.items()}
+    for r, c in med.items():
+        print(f"  {r:28s} {c:7.2f} CPU-s  {paths / c * 1e-6:6.3f} M paths per CPU-second "
+              f"(runs {', '.join(f'{x:.2f}' for x in cpu[r])})")
+    if len(med) == 2:
+        m = med[f"mitsuba {MITSUBA_VARIANT}"]
+        print(f"  ratio (Mitsuba CPU-s / pbrt CPU-s): {m / med['this pbrt']:.2f}")
+    return True
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pbrt", type=pathlib.Path, default=ROOT / "build" / "pbrt")
@@ -114,7 +213,15 @@ def main() -> int:
     ap.add_argument("--nthreads", type=int, default=2)
     ap.add_argument("--shared", type=pathlib.Path, default=ROOT.parent / "shared")
     ap.add_argument("--scenes", nargs="*", default=list(SCENES))
+    ap.add_argument("--box-spp", type=int, default=256, help="spp on the Mitsuba cross-check box (default 256)")
+    ap.add_argument("--box-reps", type=int, default=2, help="alternating reps on the box (default 2)")
+    ap.add_argument("--no-mitsuba", action="store_true", help="the box with this pbrt only")
+    ap.add_argument("--no-box", action="store_true", help="skip the Mitsuba cross-check box")
+    ap.add_argument("--no-cost", action="store_true", help="skip the table's cost in patched upstream")
     args = ap.parse_args()
+    if args.box_spp < 1 or args.box_reps < 1:
+        print("bench_renderer: --box-spp and --box-reps must be at least 1", file=sys.stderr)
+        return 1
     if args.spp < 1 or args.reps < 1 or args.cost_reps < 1:
         print("bench_renderer: --spp, --reps and --cost-reps must be at least 1", file=sys.stderr)
         return 1
@@ -165,6 +272,12 @@ def main() -> int:
                       f"{med['this pbrt'] / med['upstream']:7.2f}{note}", flush=True)
             else:
                 print(f"  {name:15s} {med['this pbrt']:10.3f} {'-':>10s} {'-':>7s}")
+
+        if not args.no_box and not crosscheck_box(args.pbrt, args.box_spp, args.box_reps, args.nthreads,
+                                                  tmp, not args.no_mitsuba):
+            failures += 1
+        if args.no_cost:
+            return 1 if failures else 0
 
         # The table's cost in patched upstream: visible vs table, alternating pairs.
         table = args.table

@@ -154,6 +154,7 @@ void Accelerator::AddMesh(int object, std::shared_ptr<TriangleMesh> mesh, int ma
     rtcReleaseGeometry(g);
     impl->Check("adding a triangle mesh");
     if (id != obj.records.size()) throw PbrtError("internal error: unexpected Embree geometry ID");
+    mesh->PrecomputeFaceNormals();
     obj.records.push_back({Record::Kind::Mesh, int(obj.meshes.size()), material, lightOffset});
     obj.meshes.push_back(std::move(mesh));
 }

@@ -58,15 +58,23 @@ inline Float FrDielectric(Float cosTheta_i, Float eta) {
 // arriving from the dielectric side (cosTheta_i is clamped to [0, 1]). The same
 // amplitude formulas as the dielectric case, with complex arithmetic; no total internal
 // reflection is possible.
-inline Float FrComplex(Float cosTheta_i, std::complex<Float> eta) {
-    using Complex = std::complex<Float>;
-    cosTheta_i = Clamp(cosTheta_i, 0, 1);
-    Float sin2Theta_i = 1 - Sqr(cosTheta_i);
-    Complex sin2Theta_t = sin2Theta_i / (eta * eta);
-    Complex cosTheta_t = std::sqrt(Float(1) - sin2Theta_t);
-    Complex rParallel = (eta * cosTheta_i - cosTheta_t) / (eta * cosTheta_i + cosTheta_t);
-    Complex rPerpendicular = (cosTheta_i - eta * cosTheta_t) / (cosTheta_i + eta * cosTheta_t);
-    return (std::norm(rParallel) + std::norm(rPerpendicular)) / 2;
+//
+// Written without complex division (a libgcc call with C99's infinity rules, slow on the
+// hot path): |a / b|^2 = |a|^2 / |b|^2, and s / e for real s is s conj(e) / |e|^2. In
+// double, so that |eta|^4 cannot overflow for any sane eta. The same value as the direct
+// complex formula up to rounding.
+inline Float FrComplex(Float cosTheta_i, std::complex<Float> etaF) {
+    using Complex = std::complex<double>;
+    double c = Clamp(cosTheta_i, 0, 1);
+    double sin2Theta_i = 1 - c * c;
+    Complex eta(etaF.real(), etaF.imag());
+    Complex eta2 = eta * eta;
+    Complex sin2Theta_t = sin2Theta_i * std::conj(eta2) / std::norm(eta2);
+    Complex cosTheta_t = std::sqrt(1.0 - sin2Theta_t);
+    Complex ec = eta * c, et = eta * cosTheta_t;
+    double rParallel = std::norm(ec - cosTheta_t) / std::norm(ec + cosTheta_t);
+    double rPerpendicular = std::norm(c - et) / std::norm(c + et);
+    return Float((rParallel + rPerpendicular) / 2);
 }
 
 // FrComplex at each of the sampled wavelengths (eta and k per wavelength).

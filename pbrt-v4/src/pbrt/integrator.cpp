@@ -32,7 +32,8 @@ namespace {
 // Direct lighting at a surface point: one light chosen by power, one sample on it, weighted
 // by MIS against BSDF sampling.
 SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const BSDF &bsdf,
-                         const SampledWavelengths &lambda, Sampler &sampler) {
+                         const SampledWavelengths &lambda, Sampler &sampler,
+                         SampledSpectrumCache &emission) {
     Float uLight = sampler.Get1D();
     Point2f u = sampler.Get2D();
     Float pmf;
@@ -40,7 +41,7 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
     if (li < 0 || pmf == 0) return SampledSpectrum(0);
     const Light &light = scene.lights[li];
     LightSampleContext ctx{si.p, si.n, si.pError};
-    std::optional<LightLiSample> ls = light.SampleLi(ctx, u, lambda);
+    std::optional<LightLiSample> ls = light.SampleLi(ctx, u, lambda, &emission);
     if (!ls || !ls->L.IsNonZero() || ls->pdf == 0) return SampledSpectrum(0);
 
     SampledSpectrum f = bsdf.f(si.wo, ls->wi) * AbsDot(ls->wi, si.ns);
@@ -64,13 +65,14 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
     bool specularBounce = false;
     LightSampleContext prevCtx;
     SurfaceInteraction si;
+    SampledSpectrumCache emission;  // emitters' spectra at lambda (cleared when it changes)
 
     while (true) {
         if (!scene.accel->Intersect(ray, &si)) {
             // Escaped: radiance of the infinite lights, MIS-weighted against NEE.
             for (int li : scene.infiniteLights) {
                 const Light &light = scene.lights[li];
-                SampledSpectrum Le = light.Le(lambda);
+                SampledSpectrum Le = light.Le(lambda, &emission);
                 if (!Le.IsNonZero()) continue;
                 if (depth == 0 || specularBounce) {
                     L += beta * Le;
@@ -85,7 +87,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         // Emission from an area light that was hit.
         if (si.areaLight >= 0) {
             const Light &light = scene.lights[si.areaLight];
-            SampledSpectrum Le = light.L(si.n, si.wo, lambda);
+            SampledSpectrum Le = light.L(si.n, si.wo, lambda, &emission);
             if (Le.IsNonZero()) {
                 if (depth == 0 || specularBounce) {
                     L += beta * Le;
@@ -98,15 +100,19 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         }
 
         // "interface" surfaces: continue through without counting a bounce.
-        std::optional<BSDF> bsdf;
+        // Initialized, not assigned: the BSDF is built in place (no copy of its variant).
+        bool wasTerminated = lambda.SecondaryTerminated();
+        std::optional<BSDF> bsdf = si.material >= 0
+            ? GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); })
+            : std::nullopt;
         if (si.material >= 0) {
-            bool wasTerminated = lambda.SecondaryTerminated();
-            bsdf = GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); });
             // Dispersion kept one wavelength: the other slots no longer count (their pdf is
             // 0); zero their throughput so that they cannot steer Russian roulette.
-            if (!wasTerminated && lambda.SecondaryTerminated())
+            if (!wasTerminated && lambda.SecondaryTerminated()) {
                 for (int i = 0; i < NSpectrumSamples; ++i)
                     if (i != lambda.SurvivingIndex()) beta[i] = 0;
+                emission.Clear();
+            }
         }
         if (!bsdf) {
             if (++skips > 256) break;
@@ -116,7 +122,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         if (depth++ == maxDepth) break;
         if (bsdf->IsBlack()) break;
 
-        if (bsdf->IsNonSpecular()) L += beta * SampleLd(scene, si, *bsdf, lambda, sampler);
+        if (bsdf->IsNonSpecular()) L += beta * SampleLd(scene, si, *bsdf, lambda, sampler, emission);
 
         // Continue the path in a BSDF-sampled direction.
         Float uc = sampler.Get1D();

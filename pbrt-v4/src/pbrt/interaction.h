@@ -1,6 +1,9 @@
 // A ray's hit on a surface, in world space, and how new rays leave it.
 #pragma once
 
+#include <cstdint>
+#include <cstring>
+
 #include <pbrt/pbrt.h>
 #include <pbrt/ray.h>
 #include <pbrt/util/vecmath.h>
@@ -26,6 +29,27 @@ struct SurfaceInteraction {
 
     // The ray origin offset off the surface, to the side of w, so a new ray does not hit the
     // surface it starts on.
+    // std::nextafter(v, +-Infinity) without the library call (a hot path): the same result
+    // for every non-NaN float, by stepping the bit pattern.
+    static Float NextFloatUp(Float v) {
+        if (v == Infinity) return v;
+        if (v == 0) v = 0.f;  // -0 steps up to the smallest positive float as well
+        uint32_t bits;
+        std::memcpy(&bits, &v, sizeof(bits));
+        bits = v >= 0 ? bits + 1 : bits - 1;
+        std::memcpy(&v, &bits, sizeof(bits));
+        return v;
+    }
+    static Float NextFloatDown(Float v) {
+        if (v == -Infinity) return v;
+        if (v == 0) v = -0.f;
+        uint32_t bits;
+        std::memcpy(&bits, &v, sizeof(bits));
+        bits = v > 0 ? bits - 1 : bits + 1;
+        std::memcpy(&v, &bits, sizeof(bits));
+        return v;
+    }
+
     Point3f OffsetRayOrigin(const Vector3f &w) const {
         Float d = Dot(Abs(n), pError);
         Vector3f offset = n * d;
@@ -33,8 +57,8 @@ struct SurfaceInteraction {
         Point3f po = p + offset;
         // Round away from p so the offset is not lost to rounding.
         for (int i = 0; i < 3; ++i) {
-            if (offset[i] > 0) po[i] = std::nextafter(po[i], Infinity);
-            else if (offset[i] < 0) po[i] = std::nextafter(po[i], -Infinity);
+            if (offset[i] > 0) po[i] = NextFloatUp(po[i]);
+            else if (offset[i] < 0) po[i] = NextFloatDown(po[i]);
         }
         return po;
     }

@@ -54,13 +54,28 @@ IndexedPiecewiseLinearSpectrum::IndexedPiecewiseLinearSpectrum(const PiecewiseLi
         Float lo = lambda0 + Float(b) - 1;
         bucketStart[b] = uint32_t(std::upper_bound(lambdas.begin(), lambdas.end(), lo) - lambdas.begin());
     }
+    if (lambdas.size() >= 2) {
+        Float step = lambdas[1] - lambdas[0];
+        bool even = step > 0;
+        for (size_t i = 0; even && i < lambdas.size(); ++i)
+            even = std::abs(lambdas[i] - (lambdas[0] + Float(i) * step)) <= 1e-3f * step;
+        if (even) uniformStep = step;
+    }
 }
 
 Float IndexedPiecewiseLinearSpectrum::operator()(Float lambda) const {
     // The same result as PiecewiseLinearSpectrum::operator(), without a binary search.
     if (!(lambda >= lambdas.front() && lambda <= lambdas.back())) return 0;
-    size_t b = std::min(size_t(lambda - lambda0), bucketStart.size() - 1);
-    size_t i = bucketStart[b], n = lambdas.size();
+    size_t i, n = lambdas.size();
+    if (uniformStep > 0) {
+        // Evenly spaced nodes (the usual tabulation): the node is where the arithmetic says,
+        // give or take one for rounding, which the two loops settle.
+        i = std::min(size_t((lambda - lambdas.front()) / uniformStep) + 1, n);
+        while (i > 0 && lambdas[i - 1] > lambda) --i;
+    } else {
+        size_t b = std::min(size_t(lambda - lambda0), bucketStart.size() - 1);
+        i = bucketStart[b];
+    }
     while (i < n && lambdas[i] <= lambda) ++i;  // first node above lambda
     if (i >= n) return values.back();
     if (i == 0) return values.front();
@@ -108,7 +123,11 @@ Float Light::Power() const {
 }
 
 std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Point2f u,
-                                             const SampledWavelengths &lambda) const {
+                                             const SampledWavelengths &lambda,
+                                             SampledSpectrumCache *cache) const {
+    auto emission = [&]() -> SampledSpectrum {
+        return cache ? cache->Get(*spectrum, lambda) : spectrum->Sample(lambda);
+    };
     LightLiSample ls;
     switch (type) {
     case LightType::Point:
@@ -123,21 +142,21 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             falloff = SmoothStep(wl.z, cosFalloffEnd, cosFalloffStart);
             if (falloff == 0) return std::nullopt;
         }
-        ls.L = spectrum->Sample(lambda) * (scale * falloff / d2);
+        ls.L = emission() * (scale * falloff / d2);
         ls.pdf = 1;
         ls.pLight = position;
         return ls;
     }
     case LightType::Distant:
         ls.wi = wLight;
-        ls.L = spectrum->Sample(lambda) * scale;
+        ls.L = emission() * scale;
         ls.pdf = 1;
         ls.pLight = ctx.p + wLight * (2 * sceneRadius);
         return ls;
     case LightType::UniformInfinite: {
         ls.wi = SampleUniformSphere(u);
         ls.pdf = UniformSpherePDF();
-        ls.L = spectrum->Sample(lambda) * scale;
+        ls.L = emission() * scale;
         ls.pLight = ctx.p + ls.wi * (2 * sceneRadius);
         return ls;
     }
@@ -148,7 +167,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
     SurfaceInteraction s;
     if (mesh) {
         auto b = SampleUniformTriangle(u);
-        mesh->Interaction(size_t(triangle), b[1], b[2], &s);
+        mesh->SurfacePoint(size_t(triangle), b[1], b[2], &s.p, &s.pError, &s.n);
     } else {
         Point3f c = sphere->renderFromObject.ApplyPoint(Point3f(0, 0, 0));
         Float R = sphere->radius * sphereScale;
@@ -169,7 +188,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             Point3f pObj = sphere->objectFromRender.ApplyPoint(ctx.p + ls.wi * t);
             sphere->Interaction(pObj, &s);
             ls.pdf = 1 / (2 * Pi * oneMinusCosMax);
-            ls.L = L(s.n, -ls.wi, lambda);
+            ls.L = L(s.n, -ls.wi, lambda, cache);
             if (!ls.L.IsNonZero()) return std::nullopt;
             ls.pLight = s.p;
             ls.nLight = s.n;
@@ -189,7 +208,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
     Float cosLight = AbsDot(s.n, ls.wi);
     if (cosLight == 0) return std::nullopt;
     ls.pdf = d2 / (area * cosLight);
-    ls.L = L(s.n, -ls.wi, lambda);
+    ls.L = L(s.n, -ls.wi, lambda, cache);
     if (!ls.L.IsNonZero() || !std::isfinite(ls.pdf)) return std::nullopt;
     ls.pLight = s.p;
     ls.nLight = s.n;

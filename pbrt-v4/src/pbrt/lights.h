@@ -54,19 +54,23 @@ class Light {
     void Preprocess(const Bounds3f &sceneBounds);
 
     // Samples incident radiance at ctx; nullopt when there is none.
+    // With a cache, the emission spectrum's values come from (and go to) it.
     std::optional<LightLiSample> SampleLi(const LightSampleContext &ctx, Point2f u,
-                                          const SampledWavelengths &lambda) const;
+                                          const SampledWavelengths &lambda,
+                                          SampledSpectrumCache *cache = nullptr) const;
     // Solid-angle density with which SampleLi picks direction wi toward the point `hit` on
     // this (area) light.
     Float PDF_Li(const LightSampleContext &ctx, const Vector3f &wi, const SurfaceInteraction &hit) const;
     // Radiance leaving an area light's surface point (normal n) in direction w.
-    SampledSpectrum L(const Normal3f &n, const Vector3f &w, const SampledWavelengths &lambda) const {
+    SampledSpectrum L(const Normal3f &n, const Vector3f &w, const SampledWavelengths &lambda,
+                      SampledSpectrumCache *cache = nullptr) const {
         if (!twoSided && Dot(n, w) < 0) return SampledSpectrum(0);
-        return spectrum->Sample(lambda) * scale;
+        return (cache ? cache->Get(*spectrum, lambda) : spectrum->Sample(lambda)) * scale;
     }
     // Radiance arriving along a ray that escapes the scene (infinite lights).
-    SampledSpectrum Le(const SampledWavelengths &lambda) const {
-        return type == LightType::UniformInfinite ? spectrum->Sample(lambda) * scale : SampledSpectrum(0);
+    SampledSpectrum Le(const SampledWavelengths &lambda, SampledSpectrumCache *cache = nullptr) const {
+        if (type != LightType::UniformInfinite) return SampledSpectrum(0);
+        return (cache ? cache->Get(*spectrum, lambda) : spectrum->Sample(lambda)) * scale;
     }
     // Whether the light sampler should pick this light for next-event estimation. The
     // uniform infinite light is left to BSDF sampling (as pbrt-v4's path integrator does).
@@ -129,6 +133,7 @@ class IndexedPiecewiseLinearSpectrum : public Spectrum {
     std::vector<Float> lambdas, values;
     std::vector<uint32_t> bucketStart;
     Float lambda0 = 0;
+    Float uniformStep = 0;  // the spacing when the nodes are evenly spaced (else 0)
 };
 SpectrumHandle FastLookup(SpectrumHandle s);
 

@@ -131,3 +131,50 @@ TEST(Lights, IndexedSpectrumMatchesPiecewiseLinear) {
     for (size_t i = 0; i < pl->Lambdas().size(); ++i)
         ASSERT_EQ(fast(pl->Lambdas()[i]), (*pl)(pl->Lambdas()[i])) << "at node " << i;
 }
+
+TEST(Lights, IndexedSpectrumEvenNodesMatchPiecewiseLinear) {
+    // Evenly spaced nodes (0.5 nm, as tabulated lamp spectra come) take the direct index.
+    RNG rng(5);
+    std::vector<Float> v;
+    for (int i = 0; i < 941; ++i) {
+        v.push_back(360 + 0.5f * i);
+        v.push_back(rng.UniformFloat() < 0.1f ? 0 : 10 * rng.UniformFloat());
+    }
+    auto pl = PiecewiseLinearSpectrum::FromInterleaved(v, false);
+    IndexedPiecewiseLinearSpectrum fast(*pl);
+    for (Float x = 350; x < 840; x += 0.00731f) ASSERT_EQ(fast(x), (*pl)(x)) << "lambda " << x;
+    for (size_t i = 0; i < pl->Lambdas().size(); ++i) {
+        Float node = pl->Lambdas()[i];
+        for (Float x : {node, std::nextafter(node, 0.f), std::nextafter(node, 1e4f)})
+            ASSERT_EQ(fast(x), (*pl)(x)) << "near node " << i;
+    }
+}
+
+TEST(Lights, AreaLightPointMatchesTheSurfaceInteraction) {
+    // SurfacePoint (light sampling) gives Interaction's p, pError and n, with and without
+    // shading normals (which can flip n) and with the stored face normals.
+    for (bool withN : {false, true}) {
+        std::vector<std::array<Float, 3>> N;
+        if (withN) N = {{0, 0, -1}, {0.1f, 0, -1}, {0, 0.2f, -1}, {0, 0, -1}};
+        auto mesh = MakeTriangleMesh(Transform(), false, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0.3f}, {0, 1, 0}},
+                                     {0, 1, 2, 0, 2, 3}, N, {}, {}, FileLoc{});
+        for (bool stored : {false, true}) {
+            if (stored) mesh->PrecomputeFaceNormals();
+            RNG rng(7);
+            for (int k = 0; k < 200; ++k) {
+                size_t tri = size_t(k % 2);
+                if (stored) ASSERT_EQ(mesh->GeometricNormal(tri), mesh->ComputeGeometricNormal(tri));
+                Float b1 = rng.UniformFloat(), b2 = rng.UniformFloat() * (1 - b1);
+                SurfaceInteraction si;
+                mesh->Interaction(tri, b1, b2, &si);
+                Point3f p;
+                Vector3f err;
+                Normal3f n;
+                mesh->SurfacePoint(tri, b1, b2, &p, &err, &n);
+                ASSERT_EQ(p, si.p);
+                ASSERT_EQ(err, si.pError);
+                ASSERT_EQ(n, si.n);
+            }
+        }
+    }
+}

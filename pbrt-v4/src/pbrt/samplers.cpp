@@ -10,8 +10,7 @@ namespace pbrt {
 namespace {
 
 uint32_t ReverseBits32(uint32_t n) {
-    n = (n << 16) | (n >> 16);
-    n = ((n & 0x00ff00ffu) << 8) | ((n & 0xff00ff00u) >> 8);
+    n = __builtin_bswap32(n);  // the two byte-level steps in one instruction
     n = ((n & 0x0f0f0f0fu) << 4) | ((n & 0xf0f0f0f0u) >> 4);
     n = ((n & 0x33333333u) << 2) | ((n & 0xccccccccu) >> 2);
     n = ((n & 0x55555555u) << 1) | ((n & 0xaaaaaaaau) >> 1);
@@ -48,6 +47,14 @@ std::array<std::array<uint32_t, 256>, 4> MakeSobolDim1Tables() {
     return t;
 }
 const std::array<std::array<uint32_t, 256>, 4> kSobolDim1 = MakeSobolDim1Tables();
+// The same with every entry bit-reversed: bit reversal is linear over GF(2), so
+// ReverseBits32(SobolDim1(i)) is the XOR of these (one reversal less per 2D sample).
+std::array<std::array<uint32_t, 256>, 4> ReversedTables(std::array<std::array<uint32_t, 256>, 4> t) {
+    for (auto &row : t)
+        for (uint32_t &v : row) v = ReverseBits32(v);
+    return t;
+}
+const std::array<std::array<uint32_t, 256>, 4> kSobolDim1Reversed = ReversedTables(kSobolDim1);
 
 Float ToUnitFloat(uint32_t v) { return std::min<Float>(v * 0x1p-32f, OneMinusEpsilon); }
 
@@ -132,6 +139,13 @@ Sampler::Sampler(SamplerType type, int samplesPerPixel, uint64_t seed, int xSamp
     if (spp < 1) throw PbrtError("the number of samples per pixel must be at least 1");
     if (type == SamplerType::Stratified && xSamples * ySamples != spp)
         throw PbrtError("stratified sampler: xsamples * ysamples must equal the pixel samples");
+    constexpr int kMaxJumps = 1 << 16;  // 1 MB; beyond, StartPixelSample advances step by step
+    if ((type == SamplerType::Independent || (type == SamplerType::Stratified && jitter)) &&
+        spp <= kMaxJumps) {
+        auto table = std::make_shared<std::vector<RNG::Jump>>(size_t(spp));
+        for (int i = 0; i < spp; ++i) (*table)[size_t(i)] = RNG::JumpFor(int64_t(i) << 20);
+        jumps = std::move(table);
+    }
 }
 
 std::string Sampler::Description() const {
@@ -148,12 +162,16 @@ void Sampler::StartPixelSample(Point2i p, int index, int dim) {
     pixel = p;
     pixelHash = HashInts({uint64_t(p.x), uint64_t(p.y), seed});
     sampleIndex = index;
+    reversedIndex = ReverseBits32(uint32_t(index));
     dimension = dim;
     if (type == SamplerType::Independent || (type == SamplerType::Stratified && jitter))
     {
         // One PCG32 stream per pixel; sample i starts 2^20 draws after sample i - 1.
         rng.SetSequence(pixelHash, 0);
-        rng.Advance(int64_t(index) << 20);
+        if (jumps && index >= 0 && size_t(index) < jumps->size())
+            rng.Advance((*jumps)[size_t(index)]);
+        else
+            rng.Advance(int64_t(index) << 20);
     }
 }
 
@@ -168,9 +186,12 @@ Float Sampler::Get1D() {
         return std::min<Float>((s + delta) / spp, OneMinusEpsilon);
     }
     case SamplerType::Sobol: {
+        // OwenScramble(SobolDim0(i), s) with both bit reversals of dimension 0 cancelled:
+        // Reverse(LK(Reverse(Reverse(i)))) = Reverse(LK(i)); reversedIndex likewise caches
+        // the first reversal of the index scramble (the same numbers, fewer operations).
         uint64_t h = DimensionHash(dim);
-        uint32_t index = OwenScramble(uint32_t(sampleIndex), uint32_t(h));
-        return ToUnitFloat(OwenScramble(SobolDim0(index), uint32_t(h >> 32)));
+        uint32_t index = ReverseBits32(LaineKarrasPermutation(reversedIndex, uint32_t(h)));
+        return ToUnitFloat(ReverseBits32(LaineKarrasPermutation(index, uint32_t(h >> 32))));
     }
     }
     return 0;
@@ -197,9 +218,12 @@ Point2f Sampler::Get2D() {
         // Both coordinates share one shuffled index so the pair stays a (0,2)-sequence.
         uint64_t h = DimensionHash(dim);
         uint64_t h2 = MixBits(h);
-        uint32_t index = OwenScramble(uint32_t(sampleIndex), uint32_t(h));
-        return {ToUnitFloat(OwenScramble(SobolDim0(index), uint32_t(h >> 32))),
-                ToUnitFloat(OwenScramble(SobolDim1(index), uint32_t(h2)))};
+        uint32_t index = ReverseBits32(LaineKarrasPermutation(reversedIndex, uint32_t(h)));
+        return {ToUnitFloat(ReverseBits32(LaineKarrasPermutation(index, uint32_t(h >> 32)))),
+                ToUnitFloat(ReverseBits32(LaineKarrasPermutation(
+                    kSobolDim1Reversed[0][index & 0xff] ^ kSobolDim1Reversed[1][(index >> 8) & 0xff] ^
+                    kSobolDim1Reversed[2][(index >> 16) & 0xff] ^ kSobolDim1Reversed[3][index >> 24],
+                    uint32_t(h2))))};
     }
     }
     return {};

@@ -17,8 +17,10 @@
 #include <pbrt/util/vecmath.h>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace pbrt {
 
@@ -64,6 +66,10 @@ class Sampler {
     uint64_t seed = 0, pixelHash = 0;
     Point2i pixel;
     int sampleIndex = 0, dimension = 0;
+    uint32_t reversedIndex = 0;  // the bit-reversed sample index (Sobol)
+    // RNG::JumpFor(i << 20) for every sample index i (for the samplers that draw from the
+    // RNG; shared by the copies each thread makes): StartPixelSample's advance in O(1).
+    std::shared_ptr<const std::vector<RNG::Jump>> jumps;
     RNG rng;
 };
 

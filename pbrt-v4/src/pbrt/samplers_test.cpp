@@ -162,3 +162,26 @@ TEST(Sampler, CreateAppliesPbrtV4DefaultsAndTheCommandLine) {
         }
     }
 }
+
+TEST(Sampler, RNGJumpsEqualAdvance) {
+    // The sampler's table of affine jumps gives the states Advance gives, on any stream.
+    for (uint64_t seq : {0ull, 1ull, 0x9e3779b97f4a7c15ull}) {
+        for (int64_t delta : {int64_t(0), int64_t(1), int64_t(7), int64_t(1) << 20, int64_t(255) << 20,
+                              int64_t(65535) << 20, (int64_t(1) << 40) + 12345}) {
+            RNG a(seq, 0), b(seq, 0);
+            a.Advance(delta);
+            b.Advance(RNG::JumpFor(delta));
+            for (int k = 0; k < 4; ++k) ASSERT_EQ(a.Uniform32(), b.Uniform32()) << seq << " " << delta;
+        }
+    }
+    // Sample indices beyond the table (none here: spp 4) still advance step by step.
+    Sampler s(SamplerType::Independent, 4, 11);
+    RNG ref;
+    for (int index : {0, 3, 100000}) {
+        s.StartPixelSample({5, 6}, index);
+        Float u = s.Get1D();
+        ref.SetSequence(HashInts({5, 6, 11}), 0);
+        ref.Advance(int64_t(index) << 20);
+        ASSERT_EQ(u, ref.UniformFloat()) << index;
+    }
+}

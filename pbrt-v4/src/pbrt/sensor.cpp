@@ -10,10 +10,19 @@ FilmSensor::FilmSensor(const RGBColorSpace *outputSpace, Float imagingRatio)
 XYZ FilmSensor::ToXYZ(const SampledSpectrum &L, const SampledWavelengths &lambda) const {
     // The Monte Carlo estimate of the integral of each matching function times L.
     SampledSpectrum Lw = SafeDiv(L, lambda.PDF());
-    return XYZ((Spectra::X().Sample(lambda) * Lw).Average(),
-               (Spectra::Y().Sample(lambda) * Lw).Average(),
-               (Spectra::Z().Sample(lambda) * Lw).Average()) *
-           imagingRatio;
+    // The three matching functions share one table index per wavelength (the values of
+    // Spectra::X().Sample(lambda) and so on).
+    const DenselySampledSpectrum &X = Spectra::X(), &Y = Spectra::Y(), &Z = Spectra::Z();
+    SampledSpectrum x, y, z;
+    for (int i = 0; i < NSpectrumSamples; ++i) {
+        int k = DenselySampledSpectrum::Index(lambda[i]);
+        if (k >= 0) {
+            x[i] = X.At(k);
+            y[i] = Y.At(k);
+            z[i] = Z.At(k);
+        }
+    }
+    return XYZ((x * Lw).Average(), (y * Lw).Average(), (z * Lw).Average()) * imagingRatio;
 }
 
 RGB FilmSensor::ToOutputRGB(const SampledSpectrum &L, const SampledWavelengths &lambda) const {

@@ -41,13 +41,36 @@ Bounds3f TriangleMesh::Bounds() const {
     return b;
 }
 
-Normal3f TriangleMesh::GeometricNormal(size_t tri) const {
+void TriangleMesh::PrecomputeFaceNormals() {
+    faceNormals.clear();
+    std::vector<Normal3f> normals(NumTriangles());
+    for (size_t t = 0; t < normals.size(); ++t) normals[t] = ComputeGeometricNormal(t);
+    faceNormals = std::move(normals);
+}
+
+Normal3f TriangleMesh::ComputeGeometricNormal(size_t tri) const {
     auto v = Vertices(tri);
     Vector3f c = Cross(v[0] - v[2], v[1] - v[2]);
     Float len = Length(c);
     Normal3f n = len > 0 ? c / len : Normal3f(0, 0, 1);
     if (reverseOrientation ^ transformSwapsHandedness) n = -n;
     return n;
+}
+
+void TriangleMesh::SurfacePoint(size_t tri, Float b1, Float b2, Point3f *pOut, Vector3f *pError,
+                                Normal3f *nOut) const {
+    // Every line as in Interaction below, so that both give the same numbers.
+    uint32_t i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
+    const Point3f &p0 = p[i0], &p1 = p[i1], &p2 = p[i2];
+    Float b0 = 1 - b1 - b2;
+    *pOut = p0 * b0 + p1 * b1 + p2 * b2;
+    Float m = MaxComponent(Abs(p0 * b0) + Abs(p1 * b1) + Abs(p2 * b2)) * kPointErrorScale;
+    *pError = Vector3f(m, m, m);
+    *nOut = GeometricNormal(tri);
+    if (!n.empty()) {
+        Normal3f ns = n[i0] * b0 + n[i1] * b1 + n[i2] * b2;
+        if (LengthSquared(ns) > 0) *nOut = FaceForward(*nOut, Normalize(ns));
+    }
 }
 
 void TriangleMesh::Interaction(size_t tri, Float b1, Float b2, SurfaceInteraction *si) const {

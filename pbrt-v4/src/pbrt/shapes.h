@@ -50,8 +50,19 @@ struct TriangleMesh {
     // The surface at barycentrics (b1, b2) of triangle tri (b0 = 1 - b1 - b2), in the
     // mesh's space; sets p, pError, n, ns, dpdu, uv, faceIndex.
     void Interaction(size_t tri, Float b1, Float b2, SurfaceInteraction *si) const;
+    // Only the position, its error bound and the (oriented) normal of Interaction, which is
+    // all that sampling a point on an area light needs (the same values, less work).
+    void SurfacePoint(size_t tri, Float b1, Float b2, Point3f *p, Vector3f *pError,
+                      Normal3f *n) const;
     // The oriented geometric normal of a triangle (see the rules above), unit length.
-    Normal3f GeometricNormal(size_t tri) const;
+    Normal3f GeometricNormal(size_t tri) const {
+        return tri < faceNormals.size() ? faceNormals[tri] : ComputeGeometricNormal(tri);
+    }
+    Normal3f ComputeGeometricNormal(size_t tri) const;
+    // Stores every triangle's GeometricNormal (the same values) for the renderer's hot path;
+    // call again after changing p, indices or the orientation flags.
+    void PrecomputeFaceNormals();
+    std::vector<Normal3f> faceNormals;  // empty or one per triangle
 };
 
 struct Sphere {

@@ -1,5 +1,6 @@
 // Tests of the wavelength sampling triples, SampledWavelengths and WavelengthSampler.
 #include <pbrt/util/spectrum.h>
+#include <pbrt/util/vecmath.h>
 #include <pbrt/wavelengths.h>
 
 #include <gtest/gtest.h>
@@ -246,4 +247,18 @@ TEST(WavelengthSampler, SeamDelegatesToTheSamplers) {
     EXPECT_THROW(WavelengthSampler::Uniform(780, 380), PbrtError);
     EXPECT_THROW(WavelengthSampler::Uniform(-5, 380), PbrtError);
     EXPECT_THROW(WavelengthSampler::Uniform(380, Infinity), PbrtError);
+}
+
+TEST(SampledWavelengths, VisiblePdfFromTheSamplersTanhIsTheDensity) {
+    // SampleVisible takes each pdf from the tanh it inverted instead of a cosh of the
+    // rounded wavelength: the same density up to that rounding, over the whole range.
+    double worst = 0;
+    for (int k = 0; k <= 20000; ++k) {
+        SampledWavelengths w = SampledWavelengths::SampleVisible(std::min<Float>(k / 20000.f, OneMinusEpsilon));
+        for (int i = 0; i < NSpectrumSamples; ++i) {
+            ASSERT_GT(w.PDF()[i], 0);
+            worst = std::max(worst, std::abs(double(w.PDF()[i]) / VisibleWavelengthsPDF(w[i]) - 1));
+        }
+    }
+    EXPECT_LT(worst, 2e-6);
 }

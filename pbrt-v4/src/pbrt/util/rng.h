@@ -55,6 +55,27 @@ class RNG {
 
     // Jumps the generator by delta steps (Brown 1994, "Random number generation with
     // arbitrary strides"), in O(log delta).
+    // Advance(delta) as an affine map of the state, state -> mult * state + plus1 * inc:
+    // the loop below is linear in inc, so plus1 is its accPlus for inc = 1. A caller that
+    // advances by the same deltas again and again keeps these (Sampler) and Jump()s.
+    struct Jump {
+        uint64_t mult = 1, plus1 = 0;
+    };
+    static Jump JumpFor(int64_t idelta) {
+        uint64_t curMult = kMultiplier, curPlus = 1u;
+        Jump j;
+        for (uint64_t delta = uint64_t(idelta); delta > 0; delta /= 2) {
+            if (delta & 1) {
+                j.mult *= curMult;
+                j.plus1 = j.plus1 * curMult + curPlus;
+            }
+            curPlus = (curMult + 1) * curPlus;
+            curMult *= curMult;
+        }
+        return j;
+    }
+    void Advance(const Jump &j) { state = j.mult * state + j.plus1 * inc; }
+
     void Advance(int64_t idelta) {
         uint64_t curMult = kMultiplier, curPlus = inc, accMult = 1u, accPlus = 0u;
         uint64_t delta = uint64_t(idelta);

@@ -107,7 +107,10 @@ SampledWavelengths SampledWavelengths::SampleVisible(Float u) {
     SampledWavelengths w;
     for (int i = 0; i < NSpectrumSamples; ++i) {
         w.lambda[i] = SampleVisibleWavelengths(StratumOffset(u, i));
-        w.pdf[i] = VisibleWavelengthsPDF(w.lambda[i]);
+        // VisibleWavelengthsPDF(lambda) without its cosh: sech^2(A (lambda - C)) = 1 - t^2
+        // with t = tanh(A (lambda - C)), the value the sampler inverted. The same density up
+        // to the float rounding of lambda (relative 1e-6 at most).
+        w.pdf[i] = VisibleWavelengthsPDFFromTanh(VisibleWavelengthsTanh(StratumOffset(u, i)));
     }
     return w;
 }
@@ -173,9 +176,8 @@ DenselySampledSpectrum::DenselySampledSpectrum(std::vector<Float> v) : values(st
 
 Float DenselySampledSpectrum::operator()(Float lambda) const {
     // The nearest nanometre (pbrt-v4 rounds the same way: std::lround, halves away from 0).
-    if (!(lambda >= Lambda_min - 0.5f && lambda < Lambda_max + 0.5f)) return 0;
-    int i = int(std::lround(lambda)) - int(Lambda_min);
-    return values[std::clamp(i, 0, kNumSamples - 1)];
+    int i = Index(lambda);
+    return i < 0 ? 0 : values[i];
 }
 
 SampledSpectrum DenselySampledSpectrum::Sample(const SampledWavelengths &lambda) const {
@@ -374,6 +376,18 @@ void SplitUnbounded(const RGBColorSpace &cs, const RGB &rgb, Float *scale, RGBSi
 RGBAlbedoSpectrum::RGBAlbedoSpectrum(const RGBColorSpace &cs, RGB rgb) {
     CheckRGB(rgb, true, "reflectance");
     rsp = cs.ToRGBCoeffs(rgb);
+}
+
+SampledSpectrum RGBAlbedoSpectrum::Sample(const SampledWavelengths &lambda) const {
+    SampledSpectrum s;
+    for (int i = 0; i < NSpectrumSamples; ++i) s[i] = rsp(lambda[i]);
+    return s;
+}
+
+SampledSpectrum RGBUnboundedSpectrum::Sample(const SampledWavelengths &lambda) const {
+    SampledSpectrum s;
+    for (int i = 0; i < NSpectrumSamples; ++i) s[i] = scale * rsp(lambda[i]);
+    return s;
 }
 
 std::string RGBAlbedoSpectrum::ToString() const {

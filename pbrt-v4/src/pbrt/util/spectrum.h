@@ -190,6 +190,30 @@ class Spectrum {
 };
 using SpectrumHandle = std::shared_ptr<const Spectrum>;
 
+// The values of a few spectra at one set of wavelengths, remembered: a path evaluates its
+// emitters' spectra at the same four wavelengths at every vertex (next-event estimation,
+// emission hits), and a tabulated spectrum costs a search per wavelength. The owner must
+// Clear() it whenever the wavelengths change. The values are those of Spectrum::Sample.
+class SampledSpectrumCache {
+  public:
+    void Clear() { keys.fill(nullptr); }
+    const SampledSpectrum &Get(const Spectrum &s, const SampledWavelengths &lambda) {
+        for (int i = 0; i < kSize; ++i)
+            if (keys[i] == &s) return values[i];
+        int i = next;
+        next = (next + 1) % kSize;
+        keys[i] = &s;
+        values[i] = s.Sample(lambda);
+        return values[i];
+    }
+
+  private:
+    static constexpr int kSize = 4;
+    std::array<const Spectrum *, kSize> keys{};
+    std::array<SampledSpectrum, kSize> values;
+    int next = 0;
+};
+
 // c at every wavelength.
 class ConstantSpectrum : public Spectrum {
   public:
@@ -222,6 +246,14 @@ class DenselySampledSpectrum : public Spectrum {
     std::string ToString() const override;
     // The value at integer wavelength Lambda_min + i.
     Float At(int i) const { return values[i]; }
+    // The sample operator() reads at lambda (the nearest nanometre), or -1 where it is 0.
+    static int Index(Float lambda) {
+        if (!(lambda >= Lambda_min - 0.5f && lambda < Lambda_max + 0.5f)) return -1;
+        // lround without the library call: lambda >= 359.5 here, and lambda + 0.5 is exact
+        // in double, so truncation rounds halves away from 0 as lround does.
+        int i = int(double(lambda) + 0.5) - int(Lambda_min);
+        return std::clamp(i, 0, kNumSamples - 1);
+    }
 
   private:
     std::vector<Float> values;
@@ -298,6 +330,8 @@ class RGBAlbedoSpectrum : public Spectrum {
   public:
     RGBAlbedoSpectrum(const RGBColorSpace &cs, RGB rgb);
     Float operator()(Float lambda) const override { return rsp(lambda); }
+    // The four values without a virtual call each (the same numbers).
+    SampledSpectrum Sample(const SampledWavelengths &lambda) const override;
     Float MaxValue() const override { return rsp.MaxValue(); }
     std::string ToString() const override;
 
@@ -311,6 +345,7 @@ class RGBUnboundedSpectrum : public Spectrum {
   public:
     RGBUnboundedSpectrum(const RGBColorSpace &cs, RGB rgb);
     Float operator()(Float lambda) const override { return scale * rsp(lambda); }
+    SampledSpectrum Sample(const SampledWavelengths &lambda) const override;
     Float MaxValue() const override { return scale * rsp.MaxValue(); }
     std::string ToString() const override;
 

@@ -269,3 +269,30 @@ TEST(Spectrum, SampleMatchesPointEvaluation) {
         EXPECT_GE(s->MaxValue() * (1 + 1e-5f), scan) << s->ToString();
     }
 }
+
+TEST(DenselySampledSpectrum, IndexIsTheNearestNanometre) {
+    for (Float l = 355; l < 835; l += 0.01f) {
+        int expect = (l >= 359.5f && l < 830.5f) ? std::clamp(int(std::lround(l)) - 360, 0, 470) : -1;
+        ASSERT_EQ(DenselySampledSpectrum::Index(l), expect) << l;
+    }
+    for (Float l : {359.5f, 400.5f, 829.5f, std::nextafter(830.5f, 0.f)})
+        EXPECT_EQ(DenselySampledSpectrum::Index(l), int(std::lround(l)) - 360) << l;
+    EXPECT_EQ(DenselySampledSpectrum::Index(NAN), -1);
+}
+
+TEST(SampledSpectrumCache, GivesSampleAndForgetsOnClear) {
+    auto a = std::make_shared<BlackbodySpectrum>(3000);
+    auto b = std::make_shared<RGBAlbedoSpectrum>(*RGBColorSpace::sRGB, RGB(0.2f, 0.5f, 0.9f));
+    std::vector<std::shared_ptr<const Spectrum>> more;
+    for (int i = 0; i < 6; ++i) more.push_back(std::make_shared<ConstantSpectrum>(0.1f * i));
+    SampledWavelengths l1 = SampledWavelengths::SampleVisible(0.3f), l2 = SampledWavelengths::SampleVisible(0.8f);
+    SampledSpectrumCache cache;
+    EXPECT_EQ(cache.Get(*a, l1), a->Sample(l1));
+    EXPECT_EQ(cache.Get(*b, l1), b->Sample(l1));
+    EXPECT_EQ(cache.Get(*a, l1), a->Sample(l1));
+    for (auto &s : more) EXPECT_EQ(cache.Get(*s, l1), s->Sample(l1));  // evicts a and b
+    EXPECT_EQ(cache.Get(*a, l1), a->Sample(l1));
+    cache.Clear();
+    EXPECT_EQ(cache.Get(*a, l2), a->Sample(l2));  // new wavelengths after Clear
+    EXPECT_EQ(cache.Get(*b, l2), b->Sample(l2));
+}

@@ -37,9 +37,20 @@ inline Float VisibleWavelengthsPDF(Float lambda) {
     return Float(A / ((T1() - T0()) * ch * ch));
 }
 
+// tanh(A (lambda - C)) of the wavelength SampleVisibleWavelengths(u) returns (before its
+// rounding to Float), and the density there from it.
+inline double VisibleWavelengthsTanh(Float u) {
+    using namespace visible_density;
+    return T0() + std::clamp(double(u), 0.0, 1.0) * (T1() - T0());
+}
+inline Float VisibleWavelengthsPDFFromTanh(double t) {
+    using namespace visible_density;
+    return Float(A / (T1() - T0()) * (1 - t * t));
+}
+
 inline Float SampleVisibleWavelengths(Float u) {
     using namespace visible_density;
-    double t = T0() + std::clamp(double(u), 0.0, 1.0) * (T1() - T0());
+    double t = VisibleWavelengthsTanh(u);
     double lambda = C + std::atanh(t) / A;
     return Float(std::clamp(lambda, double(Lambda_min), double(Lambda_max)));
 }
