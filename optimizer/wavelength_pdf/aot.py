@@ -19,6 +19,11 @@ the plain jitted function; a file that does not load or run is deleted.
 
 Only the user's own cache directory is read: the files are pickles, like the executables
 in JAX's own cache, and must not come from anyone else.
+
+A compilation cannot be cut short, so a time cap (``optimize --max-seconds``) is kept by not
+starting one that would end past it: inside :func:`compile_deadline`, a call that would have
+to compile raises :class:`CompileWouldOverrun` when less time is left than the longest
+compilation of this process took (``DEFAULT_COMPILE_SECONDS`` before the first).
 """
 
 from __future__ import annotations
@@ -30,6 +35,8 @@ import pickle
 import platform
 import sys
 import tempfile
+import time
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Callable
 
@@ -37,6 +44,45 @@ import jax
 
 _dir: Path | None = None
 _env_key: str | None = None
+
+#: What a compilation is expected to take before this process has timed one (seconds; the
+#: search's objective with its gradient takes 2-5 s on one core).
+DEFAULT_COMPILE_SECONDS = 3.0
+_deadline: float | None = None  # time.monotonic() by which a compilation must end
+_compile_seconds: list[float] = []  # the compilations of this process
+
+
+class CompileWouldOverrun(RuntimeError):
+    """A compilation would end past the :func:`compile_deadline`."""
+
+
+@contextmanager
+def compile_deadline(deadline: float | None):
+    """Within the block no compilation starts that is expected to end after ``deadline``
+    (a ``time.monotonic()`` value; None: no limit)."""
+    global _deadline
+    old, _deadline = _deadline, deadline
+    try:
+        yield
+    finally:
+        _deadline = old
+
+
+def _may_compile(name: str) -> None:
+    if _deadline is None:
+        return
+    expected = max(_compile_seconds, default=DEFAULT_COMPILE_SECONDS)
+    left = _deadline - time.monotonic()
+    if left < expected:
+        raise CompileWouldOverrun(f"compiling {name} takes about {expected:.1f} s; {max(left, 0.0):.1f} s "
+                                  "of the time cap are left")
+
+
+@contextmanager
+def _timed_compilation():
+    t = time.monotonic()
+    yield
+    _compile_seconds.append(time.monotonic() - t)
 
 
 def enable(path: str | os.PathLike | None) -> None:
@@ -103,13 +149,14 @@ class DiskJit:
         self.jitted = jitted
         self.name = name
         self._compiled: dict = {}
+        self._seen: set = set()  # signatures run without the disk cache
         self.__wrapped__ = jitted
         self._static = tuple(static_argnames)
         self._signature = inspect.signature(fn) if self._static else None
 
     def __call__(self, *args, **static):
         if _dir is None:
-            return self.jitted(*args, **static)
+            return self._plain(args, static)
         if self._static:
             # Static arguments given by position become keywords (they are part of the
             # signature, not arguments of the executable).
@@ -126,6 +173,21 @@ class DiskJit:
             fn = self._load_or_compile(sig, args, static)
             self._compiled[sig] = fn
         return fn(*args)
+
+    def _plain(self, args, static):
+        """The jitted function; its first call per signature compiles, under the deadline."""
+        try:
+            leaves, tree = jax.tree_util.tree_flatten(args)
+            sig = (str(tree), tuple(_leaf_signature(x) for x in leaves), tuple(sorted(static.items())))
+        except TypeError:
+            return self.jitted(*args, **static)
+        if sig in self._seen:
+            return self.jitted(*args, **static)
+        _may_compile(self.name)
+        with _timed_compilation():
+            out = jax.block_until_ready(self.jitted(*args, **static))
+        self._seen.add(sig)
+        return out
 
     def _path(self, sig) -> Path:
         key = hashlib.sha256(repr((self.name, sig, environment_key())).encode()).hexdigest()[:40]
@@ -146,7 +208,9 @@ class DiskJit:
                 return self._load(path, args)
             except Exception:  # any unreadable or unrunnable file: recompile
                 path.unlink(missing_ok=True)
-        compiled = _compile_fresh(self.jitted.lower(*args, **static))
+        _may_compile(self.name)
+        with _timed_compilation():
+            compiled = _compile_fresh(self.jitted.lower(*args, **static))
         try:
             from jax.experimental import serialize_executable
 

@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import grids, health as health_mod, init as init_mod, objective
+from . import aot, grids, health as health_mod, init as init_mod, objective
 from .model import DEFAULT_GRID, trapezoid
 from .precision import float64
 from .result import Result
@@ -150,10 +150,14 @@ def optimize_spectrum(
                                    f"cap of {max_seconds:g} s were left after choosing the grid "
                                    "and compiling, less than starting the search takes")
     else:
-        with single_threaded_blas():
-            run = SOLVERS[solver](problem, P0, seed=seed,
-                                  progress=_offset_progress(progress, offset), max_seconds=left,
-                                  **(solver_options or {}))
+        try:
+            with single_threaded_blas(), aot.compile_deadline(None if left is None else t0 + max_seconds):
+                run = SOLVERS[solver](problem, P0, seed=seed,
+                                      progress=_offset_progress(progress, offset), max_seconds=left,
+                                      **(solver_options or {}))
+        except aot.CompileWouldOverrun as e:  # before the search had a point of its own
+            run = SolverResult(P=np.asarray(P0, dtype=np.float64), J=J_init,
+                               message=f"{solver}: stopped by the time cap of {max_seconds:g} s ({e})")
     history = list(run.history)
     offset[0] += run.nfev
     P = _normalize_rows(grid, run.P)

@@ -315,9 +315,13 @@ class _Context:
             if self.out_of_budget():
                 raise _OutOfBudget
             xj = _put(x)
-            P = _to_P(xj, E, self.s, mask, self.dg, name)
-            val, J, gP = self.evaluate(P, var_ref)
-            g = np.asarray(_pull_back(xj, E, self.s, mask, self.dg, gP, name), dtype=np.float64)
+            try:
+                P = _to_P(xj, E, self.s, mask, self.dg, name)
+                val, J, gP = self.evaluate(P, var_ref)
+                g = np.asarray(_pull_back(xj, E, self.s, mask, self.dg, gP, name), dtype=np.float64)
+            except aot.CompileWouldOverrun:  # the time cap: keep the best point so far
+                self.timed_out = True
+                raise _OutOfBudget from None
             self.nfev += 1
             if not np.isfinite(val) or not np.all(np.isfinite(g)):
                 # A step into a region the objective cannot evaluate: make it unattractive.

@@ -2,6 +2,8 @@
 bit-identical results to the plain jitted one, the signature separates shapes and static
 arguments, and a damaged file is replaced instead of failing."""
 
+import time
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -77,3 +79,26 @@ def test_traced_arguments_and_no_cache_fall_back_to_jit(tmp_path):
     g = jax.grad(lambda s: jnp.sum(f(x, arr, s, "cumsum")))(1.0)  # s is a tracer
     assert float(g) == pytest.approx(36.0)
     assert not list(tmp_path.glob("f-*.pkl"))
+
+
+@pytest.mark.parametrize("on_disk", [True, False])
+def test_no_compilation_starts_that_would_end_past_the_deadline(on_disk, tmp_path, monkeypatch):
+    """A time cap is kept across compilations, which cannot be cut short: under a deadline
+    a call that must compile first refuses when less time is left than a compilation takes;
+    one already compiled runs whatever the deadline."""
+    monkeypatch.setattr(aot, "_dir", tmp_path if on_disk else None)
+    monkeypatch.setattr(aot, "_compile_seconds", [])  # none timed yet: the default applies
+
+    def triple_plus_one(x):
+        return 3.0 * x + 1.0
+
+    f = aot.disk_jit(triple_plus_one)
+    x = jnp.arange(5.0)
+    with aot.compile_deadline(time.monotonic() + 0.5 * aot.DEFAULT_COMPILE_SECONDS):
+        with pytest.raises(aot.CompileWouldOverrun, match="time cap"):
+            f(x)
+    np.testing.assert_array_equal(np.asarray(f(x)), 3.0 * np.arange(5.0) + 1.0)  # no deadline
+    with aot.compile_deadline(time.monotonic() - 1.0):  # already past: nothing new compiles
+        np.testing.assert_array_equal(np.asarray(f(x)), 3.0 * np.arange(5.0) + 1.0)
+        with pytest.raises(aot.CompileWouldOverrun):
+            f(jnp.arange(6.0))  # another shape: another compilation
