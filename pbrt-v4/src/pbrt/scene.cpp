@@ -577,7 +577,7 @@ void SceneBuilder::EndOfFiles() {
     FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
                                            opts.resolution, opts.resolutionScale, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
-    if (opts.outfile.empty()) {
+    if (opts.outfile.empty() && opts.emissionSpectrum.empty()) {
         try {
             CheckOutputImagePath(fs.filename);
         } catch (const PbrtError &e) {
