@@ -60,6 +60,16 @@ def budget(solver: str | None, grid, max_evals: int | None) -> int:
                              {"max_evals": max_evals} if max_evals else None)
 
 
+def whole_scene(spec: str, lo: float, hi: float, pbrt: str | None) -> Spectrum:
+    """``--whole-scene``: the scene's total emission, from the renderer (design §5.6)."""
+    from wavelength_pdf.scene_spectra import whole_scene_spectrum
+
+    if not spec.lower().endswith(".pbrt"):
+        raise BadInput(f"--whole-scene needs a pbrt-v4 scene (.pbrt), not {spec!r} (a scene's "
+                       "emitters are summed; scene.pbrt#N picks one emitter instead)")
+    return whole_scene_spectrum(spec, lo=lo, hi=hi, pbrt=pbrt)
+
+
 def cmd_optimize(args: argparse.Namespace) -> int:
     from wavelength_pdf.progress import OptimizationProgress
 
@@ -68,7 +78,12 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     check_solver(args.solver)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
+        if args.whole_scene:
+            spectra = [whole_scene(args.spectrum, lo, hi, args.pbrt)]
+        else:
+            if args.pbrt is not None:
+                raise BadInput("--pbrt is only used with --whole-scene")
+            spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
     paths = output_paths(spectra, args.output)
@@ -103,6 +118,14 @@ def add_parser(sub, names: list[str]) -> None:
     o.add_argument("-o", "--output", required=True, metavar="TABLE",
                    help="output table (.csv); for a scene with several emitters, a "
                         "directory (ending in '/') or a pattern with {name} or {index}")
+    o.add_argument("--whole-scene", action="store_true",
+                   help="SPECTRUM is a pbrt-v4 scene: write ONE table for the light of the "
+                        "whole scene, every emitter's spectrum weighted by the power it emits "
+                        "there, as the renderer computes it (pbrt --emission-spectrum, "
+                        "design §5.6); the table covers every lamp")
+    o.add_argument("--pbrt", metavar="PATH", default=None,
+                   help="with --whole-scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
+                        "else the checkout's build/pbrt, else pbrt on PATH)")
     solver_args(o, names)
     range_args(o)
     o.add_argument("--colour-bar", "--color-bar", dest="colour_bar", metavar="PNG",
