@@ -81,11 +81,17 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         if args.whole_scene:
             spectra = [whole_scene(args.spectrum, lo, hi, args.pbrt)]
         else:
-            if args.pbrt is not None:
-                raise BadInput("--pbrt is only used with --whole-scene")
+            if args.pbrt is not None and args.reflectances != "scene":
+                raise BadInput("--pbrt is only used with --whole-scene or --reflectances scene")
             spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+    reflectances = None
+    if args.reflectances is not None:
+        from wavelength_pdf.reflectances import load_reflectances
+
+        reflectances = load_reflectances(args.reflectances, scene=args.spectrum, lo=lo, hi=hi,
+                                         pbrt=args.pbrt)
     paths = output_paths(spectra, args.output)
     several = len(spectra) > 1
     total = budget(args.solver, grid, args.max_evals)
@@ -95,7 +101,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         try:
             out = optimize_one(sp, path, grid, args.solver, args.seed, args.max_seconds, bar,
                                _suffix_path(args.colour_bar, sp, several),
-                               _suffix_path(args.plot, sp, several), max_evals=args.max_evals)
+                               _suffix_path(args.plot, sp, several), max_evals=args.max_evals,
+                               reflectances=reflectances)
         finally:
             bar.close()
         print(summary_line(out.result, path if out.written else None))
@@ -123,8 +130,15 @@ def add_parser(sub, names: list[str]) -> None:
                         "whole scene, every emitter's spectrum weighted by the power it emits "
                         "there, as the renderer computes it (pbrt --emission-spectrum, "
                         "design §5.6); the table covers every lamp")
+    o.add_argument("--reflectances", metavar="SET", default=None,
+                   help="optimize for coloured surfaces instead of one white (design §4.5): J "
+                        "is the mean of each colour's J and the health rules hold for every "
+                        "colour. SET: 'scene' (the materials of the .pbrt scene, as the "
+                        "renderer builds them), 'colorchecker' (the 24 patches "
+                        "colour-science ships) or a CSV file (design §3.4: a wavelength "
+                        "column, then one column per reflectance)")
     o.add_argument("--pbrt", metavar="PATH", default=None,
-                   help="with --whole-scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
+                   help="with --whole-scene or --reflectances scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
                         "else the checkout's build/pbrt, else pbrt on PATH)")
     solver_args(o, names)
     range_args(o)
