@@ -86,3 +86,34 @@ def test_bad_whole_scene_input_exits_2(tmp_path, capsys, argv, message):
     assert code == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "t.csv").exists()
+
+
+def test_scene_reflectances_are_the_materials_the_renderer_builds(pbrt):
+    from wavelength_pdf.reflectances import scene_reflectances
+
+    s = scene_reflectances(SCENE, pbrt=pbrt)
+    # The quads use pbrt-v4's default material (constant 0.5), the floor an RGB albedo.
+    assert s.labels[0] == "default material" and len(s) == 2
+    np.testing.assert_allclose(s.values[0], 0.5, rtol=1e-6)
+    floor = s.values[1]
+    assert np.all((floor >= 0) & (floor <= 1))
+    assert np.interp(650, s.wavelengths, floor) > 2 * np.interp(450, s.wavelengths, floor)
+
+
+def test_whole_scene_with_the_scenes_reflectances_end_to_end(pbrt, tmp_path, monkeypatch):
+    monkeypatch.setenv("WAVELENGTH_PDF_PBRT", str(pbrt))
+    out = tmp_path / "t.csv"
+    code = cli.main(["optimize", str(SCENE), "--whole-scene", "--reflectances", "scene", "-o",
+                     str(out), "--grid-step", "20", "--max-evals", "20", "--quiet"])
+    assert code == 0
+    hdr = read_header(read_table(out))
+    assert hdr["name"] == "two-lamps-whole-scene" and "reflectances: scene (2 colours" in hdr["source"]
+
+
+def test_a_scene_without_diffuse_materials_has_no_reflectances(pbrt, tmp_path, capsys):
+    glass = tmp_path / "glass.pbrt"
+    glass.write_text('WorldBegin\nLightSource "point"\nMaterial "dielectric"\nShape "sphere"\n')
+    assert cli.main(["optimize", str(glass), "--reflectances", "scene", "--pbrt", str(pbrt),
+                     "-o", str(tmp_path / "t.csv"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert str(glass) in err and "non-zero diffuse reflectance" in err

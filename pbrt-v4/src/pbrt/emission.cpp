@@ -1,12 +1,14 @@
 #include <pbrt/emission.h>
 
 #include <pbrt/lights.h>
+#include <pbrt/materials.h>
 #include <pbrt/scene.h>
 #include <pbrt/util/spectrum.h>
 
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -86,6 +88,93 @@ void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {
                            "lambda (nm), power per nm\n") > 0;
     for (size_t i = 0; i < s.lambdas.size() && ok; ++i)
         ok = std::fprintf(f, "%.17g %.17g\n", s.lambdas[i], s.values[i]) > 0;
+    ok = (std::fclose(f) == 0) && ok;
+    std::error_code ec;
+    if (ok) std::filesystem::rename(tmp, path, ec);
+    if (!ok || ec) {
+        std::filesystem::remove(tmp, ec);
+        throw PbrtError("\"" + path + "\": writing failed");
+    }
+}
+
+}  // namespace pbrt
+
+namespace pbrt {
+
+namespace {
+
+// The mean of a reflectance texture at the wavelengths lambda0 .. lambda0 + 3.
+std::array<double, NSpectrumSamples> TextureMean(const SpectrumTexture &tex, Float lambda0) {
+    Float lam[NSpectrumSamples], pdf[NSpectrumSamples];
+    for (int i = 0; i < NSpectrumSamples; ++i) {
+        lam[i] = std::min(lambda0 + Float(i), Lambda_max);
+        pdf[i] = 1;
+    }
+    SampledWavelengths lambda = SampledWavelengths::FromArrays(lam, pdf);
+    std::array<double, NSpectrumSamples> sum{};
+    if (SpectrumHandle s = tex.Constant()) {
+        for (int i = 0; i < NSpectrumSamples; ++i) sum[i] = double((*s)(lam[i]));
+        return sum;
+    }
+    constexpr int n = 32;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            TextureEvalContext ctx;
+            ctx.uv = Point2f((x + 0.5f) / n, (y + 0.5f) / n);
+            ctx.p = Point3f(ctx.uv.x, ctx.uv.y, 0);
+            SampledSpectrum v = tex.Evaluate(ctx, lambda);
+            for (int i = 0; i < NSpectrumSamples; ++i) sum[i] += double(v[i]) / (n * n);
+        }
+    return sum;
+}
+
+const SpectrumTexture *Reflectance(const Material &m) {
+    if (auto *d = std::get_if<DiffuseMaterial>(&m)) return d->reflectance.get();
+    if (auto *c = std::get_if<CoatedDiffuseMaterial>(&m)) return c->reflectance.get();
+    if (auto *c = std::get_if<ConductorMaterial>(&m)) return c->reflectance.get();
+    return nullptr;
+}
+
+}  // namespace
+
+MaterialReflectances SceneMaterialReflectances(const Scene &scene) {
+    MaterialReflectances out;
+    const int n = int(Lambda_max - Lambda_min) + 1;
+    for (size_t m = 0; m < scene.materials.size(); ++m) {
+        if (m >= scene.materialUsed.size() || !scene.materialUsed[m]) continue;
+        const SpectrumTexture *tex = Reflectance(scene.materials[m]);
+        if (!tex) continue;
+        std::vector<double> v(static_cast<size_t>(n));
+        for (int i = 0; i < n; i += NSpectrumSamples) {
+            auto r = TextureMean(*tex, Lambda_min + Float(i));
+            for (int k = 0; k < NSpectrumSamples && i + k < n; ++k) v[size_t(i + k)] = r[k];
+        }
+        if (*std::max_element(v.begin(), v.end()) <= 0) continue;
+        std::string label = scene.materialWhere[m];
+        std::replace(label.begin(), label.end(), ',', ' ');
+        out.labels.push_back(label);
+        out.values.push_back(std::move(v));
+    }
+    if (out.labels.empty())
+        throw PbrtError("no shape of the scene uses a material with a non-zero diffuse "
+                        "reflectance (diffuse, coateddiffuse, or conductor with \"reflectance\")");
+    return out;
+}
+
+void WriteMaterialReflectances(const std::string &path, const MaterialReflectances &m) {
+    std::string tmp = path + ".tmp" + std::to_string(getpid());
+    FILE *f = std::fopen(tmp.c_str(), "w");
+    if (!f) throw PbrtError("\"" + path + "\": cannot be written");
+    bool ok = std::fprintf(f, "# The diffuse reflectances of the scene's materials (design section 5.6)\n"
+                              "lambda_nm") > 0;
+    for (const std::string &l : m.labels) ok = ok && std::fprintf(f, ",%s", l.c_str()) > 0;
+    ok = ok && std::fputc('\n', f) != EOF;
+    const int n = int(Lambda_max - Lambda_min) + 1;
+    for (int i = 0; i < n && ok; ++i) {
+        ok = std::fprintf(f, "%d", int(Lambda_min) + i) > 0;
+        for (const auto &v : m.values) ok = ok && std::fprintf(f, ",%.17g", v[size_t(i)]) > 0;
+        ok = ok && std::fputc('\n', f) != EOF;
+    }
     ok = (std::fclose(f) == 0) && ok;
     std::error_code ec;
     if (ok) std::filesystem::rename(tmp, path, ec);

@@ -31,4 +31,20 @@ void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s);
 // directory; its directory exists), checked before the scene is parsed.
 void CheckOutputFilePath(const std::string &path);
 
+// The diffuse reflectances of the materials that the scene's shapes use (design §5.6): the
+// "reflectance" of "diffuse", "coateddiffuse" and "conductor" (when given as a reflectance)
+// materials, as the renderer builds them (RGB through its sigmoid-polynomial tables), a
+// texture by its mean over uv in [0, 1]^2 (32 x 32 cell centres), at 360, 361, ..., 830 nm.
+// Materials whose reflectance is zero everywhere are left out (a black surface has no colour
+// to estimate). Throws PbrtError when no material is left.
+struct MaterialReflectances {
+    std::vector<std::string> labels;            // where each material was defined
+    std::vector<std::vector<double>> values;    // per material, 471 values
+};
+MaterialReflectances SceneMaterialReflectances(const Scene &scene);
+
+// Writes them as a reflectance CSV (design §3.4): a "lambda_nm,LABEL..." header, then one
+// row per nanometre; through a temporary file renamed into place.
+void WriteMaterialReflectances(const std::string &path, const MaterialReflectances &m);
+
 }  // namespace pbrt

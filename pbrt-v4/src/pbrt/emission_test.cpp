@@ -5,6 +5,7 @@
 #include <pbrt/options.h>
 #include <pbrt/scene.h>
 #include <pbrt/util/cie_data.h>
+#include <pbrt/util/color.h>
 #include <pbrt/util/spectrum.h>
 
 #include <gtest/gtest.h>
@@ -142,4 +143,35 @@ Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 2]
         EXPECT_NE(std::string(err.what()).find("no emitters"), std::string::npos) << err.what();
     }
     EXPECT_THROW(SceneEmissionSpectrum(*Load(R"(LightSource "point" "float scale" [0])")), PbrtError);
+}
+
+TEST(MaterialReflectances, AsTheRendererBuildsThem) {
+    std::string world = R"(
+LightSource "point" "float scale" [1]
+Texture "checks" "spectrum" "checkerboard" "rgb tex1" [1 0 0] "rgb tex2" [0 0 1] "float uscale" [4] "float vscale" [4]
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.8 0.2 0.1]
+  Shape "sphere"
+AttributeEnd
+Material "diffuse" "spectrum reflectance" [300 0.1 900 0.9]
+Material "coateddiffuse" "texture reflectance" "checks"
+Shape "sphere"
+Material "diffuse" "rgb reflectance" [0 0 0]
+Shape "sphere"
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+)";
+    MaterialReflectances m = SceneMaterialReflectances(*Load(world));
+    // The unused spectrum material, the black one and the unused grey one are left out.
+    ASSERT_EQ(m.labels.size(), size_t(2));
+    EXPECT_EQ(m.labels[0], "<string>:10:3");  // where the material was defined
+    RGBAlbedoSpectrum rgb(*RGBColorSpace::sRGB, RGB(0.8f, 0.2f, 0.1f));
+    RGBAlbedoSpectrum red(*RGBColorSpace::sRGB, RGB(1, 0, 0)), blue(*RGBColorSpace::sRGB, RGB(0, 0, 1));
+    for (int i = 0; i <= 470; ++i) {
+        Float l = 360 + Float(i);
+        EXPECT_NEAR(m.values[0][size_t(i)], double(rgb(l)), 1e-7) << l;
+        // A 4 x 4 checkerboard over uv: half of each, exactly, at the 32 x 32 cell centres.
+        EXPECT_NEAR(m.values[1][size_t(i)], 0.5 * (double(red(l)) + double(blue(l))), 1e-6) << l;
+    }
+    EXPECT_THROW(SceneMaterialReflectances(*Load(R"(Material "dielectric"
+Shape "sphere")")), PbrtError);
 }

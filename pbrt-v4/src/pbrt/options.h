@@ -28,6 +28,9 @@ struct RenderOptions {
     // --emission-spectrum FILE: write the scene's total emitted spectral power (design §5.6)
     // instead of rendering (the film's output path is then not checked).
     std::string emissionSpectrum;
+    // --material-reflectances FILE: write the diffuse reflectances of the scene's materials
+    // (design §5.6) instead of rendering.
+    std::string materialReflectances;
 };
 
 }  // namespace pbrt
