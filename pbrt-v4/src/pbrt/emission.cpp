@@ -150,6 +150,8 @@ MaterialReflectances SceneMaterialReflectances(const Scene &scene) {
             for (int k = 0; k < NSpectrumSamples && i + k < n; ++k) v[size_t(i + k)] = r[k];
         }
         if (*std::max_element(v.begin(), v.end()) <= 0) continue;
+        // A reflectance already listed (several materials of the same colour) counts once.
+        if (std::find(out.values.begin(), out.values.end(), v) != out.values.end()) continue;
         std::string label = scene.materialWhere[m];
         std::replace(label.begin(), label.end(), ',', ' ');
         out.labels.push_back(label);

@@ -36,7 +36,8 @@ void CheckOutputFilePath(const std::string &path);
 // materials, as the renderer builds them (RGB through its sigmoid-polynomial tables), a
 // texture by its mean over uv in [0, 1]^2 (32 x 32 cell centres), at 360, 361, ..., 830 nm.
 // Materials whose reflectance is zero everywhere are left out (a black surface has no colour
-// to estimate). Throws PbrtError when no material is left.
+// to estimate), and so are repeats of a reflectance already listed (the first material of
+// each distinct reflectance names it). Throws PbrtError when no material is left.
 struct MaterialReflectances {
     std::vector<std::string> labels;            // where each material was defined
     std::vector<std::vector<double>> values;    // per material, 471 values

@@ -175,3 +175,18 @@ Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
     EXPECT_THROW(SceneMaterialReflectances(*Load(R"(Material "dielectric"
 Shape "sphere")")), PbrtError);
 }
+
+TEST(MaterialReflectances, RepeatedColoursCountOnce) {
+    std::string world = R"(
+LightSource "point" "float scale" [1]
+Material "diffuse" "rgb reflectance" [0.3 0.4 0.5]
+Shape "sphere"
+Material "diffuse" "rgb reflectance" [0.3 0.4 0.5]
+Shape "sphere"
+Material "diffuse" "rgb reflectance" [0.5 0.4 0.3]
+Shape "sphere"
+)";
+    MaterialReflectances m = SceneMaterialReflectances(*Load(world));
+    ASSERT_EQ(m.labels.size(), size_t(2));
+    EXPECT_NE(m.values[0], m.values[1]);
+}
