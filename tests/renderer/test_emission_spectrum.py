@@ -87,6 +87,27 @@ def test_an_unwritable_output_is_refused_before_parsing(pbrt, tmp_path):
     assert "output directory does not exist" in r.stderr
 
 
-def test_help_lists_the_option(pbrt):
+def test_help_lists_the_options(pbrt):
     r = subprocess.run([str(pbrt), "--help"], capture_output=True, text=True, timeout=60)
-    assert "--emission-spectrum" in r.stdout
+    assert "--emission-spectrum" in r.stdout and "--material-reflectances" in r.stdout
+
+
+def test_material_reflectances_are_a_reflectance_file(pbrt, tmp_path):
+    """The CSV reads back with the optimizer's reflectance reader (design §3.4): one column per
+    distinct reflectance the shapes use; both queries at once write both files."""
+    from wavelength_pdf.reflectances import read_reflectances
+
+    (tmp_path / "scene.pbrt").write_text(SCENE + 'Material "diffuse" "rgb reflectance" [0.2 0.4 0.6]\n'
+                                         'Shape "sphere"\n')
+    (tmp_path / "lamp.spd").write_text(LAMP_SPD)
+    refl, spd = tmp_path / "m.csv", tmp_path / "e.spd"
+    r = run(pbrt, "--material-reflectances", str(refl), "--emission-spectrum", str(spd),
+            str(tmp_path / "scene.pbrt"))
+    assert r.returncode == 0, r.stderr
+    s = read_reflectances(refl)
+    line = SCENE.count("\n") + 1  # the Material statement follows the scene text
+    assert s.labels == ("default material", f"{tmp_path / 'scene.pbrt'}:{line}:1")
+    np.testing.assert_array_equal(s.wavelengths, np.arange(360.0, 831.0))
+    np.testing.assert_allclose(s.values[0], 0.5)
+    assert s.values[1][450 - 360] > 2 * s.values[1][650 - 360]  # rgb (0.2, 0.4, 0.6): bluish
+    assert spd.is_file()
