@@ -106,8 +106,13 @@ def rejection(health: "Health", reference: "Health | None" = None, J: float | No
     if reference is not None:
         worse = health.std > reference.std * (1.0 + STD_RTOL)
         if np.any(worse):
+            # With surface colours (design §4.5) std is (K, 3): name the first colour too.
+            where = ""
+            if worse.ndim == 2:
+                k = int(np.flatnonzero(worse.any(axis=1))[0])
+                where, worse = f" of surface colour #{k}", worse[k]
             ch = ",".join("XYZ"[i] for i in np.flatnonzero(worse))
-            return f"std/c worse than the initialization's in channel(s) {ch}"
+            return f"std/c worse than the initialization's in channel(s) {ch}{where}"
     if J is not None and J_uniform is not None:
         if not np.isfinite(J):
             return f"J is {J}"

@@ -107,6 +107,14 @@ def test_health_holds_for_every_colour(lamp, table):
     assert np.max(np.abs(h.bias_xyz[1])) > 1e-2 and np.max(np.abs(h.bias_xyz[0])) < 1e-9
     assert h.bias == pytest.approx(np.max(np.abs(h.bias_xyz)))
     assert "relative bias" in health.rejection(h)
+    # A colour whose std is worse than the initialization's is named.
+    std = np.full((2, 3), 0.1)
+    ref = health.Health(bias=0.0, bias_xyz=np.zeros((2, 3)), std=std, missing_mass=np.zeros((2, 3)))
+    worse = health.Health(bias=0.0, bias_xyz=np.zeros((2, 3)), std=std * [[1, 1, 1], [1, 2, 1]],
+                          missing_mass=np.zeros((2, 3)))
+    assert health.rejection(ref, ref) == ""
+    assert health.rejection(worse, ref) == ("std/c worse than the initialization's in channel(s) Y "
+                                            "of surface colour #1")
 
 
 def test_colorchecker_has_24_reflectances():
