@@ -33,6 +33,8 @@ __all__ = ["ReflectanceSet", "colorchecker", "read_reflectances", "scene_reflect
 
 #: The names ``--reflectances`` takes besides a file.
 REFLECTANCE_SETS = ("scene", "colorchecker")
+#: ``--reflectances white``: no set, the one white surface of design §4.1.
+WHITE = "white"
 
 
 @dataclass(frozen=True)
@@ -211,6 +213,9 @@ def scene_reflectances(scene: str | os.PathLike, lo: float = 380.0, hi: float = 
 def load_reflectances(spec: str, scene: str | os.PathLike | None = None, lo: float = 380.0,
                       hi: float = 780.0, pbrt: str | os.PathLike | None = None) -> ReflectanceSet:
     """``--reflectances SPEC``: ``scene`` (needs ``scene``), ``colorchecker`` or a file."""
+    if spec == "white":
+        raise SpectrumError("'white' is the surface of design §4.1, not a set of reflectances "
+                            "(optimize without reflectances)")
     if spec == "colorchecker":
         return colorchecker(lo, hi)
     if spec == "scene":

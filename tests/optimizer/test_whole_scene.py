@@ -74,7 +74,7 @@ def test_a_scene_without_emitters_is_refused(pbrt, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["cie:FL2", "--whole-scene"], "--whole-scene needs a pbrt-v4 scene"),
-    (["cie:FL2", "--pbrt", "x"], "--pbrt is only used with --whole-scene"),
+    (["cie:FL2", "--pbrt", "x"], "--pbrt is only used with a scene"),
     (["{scene}", "--whole-scene", "--pbrt", "/no/such/pbrt"], "not an executable file"),
     (["/no/such.pbrt", "--whole-scene"], "no such scene file"),
 ])
@@ -117,3 +117,29 @@ def test_a_scene_without_diffuse_materials_has_no_reflectances(pbrt, tmp_path, c
                      "-o", str(tmp_path / "t.csv"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert str(glass) in err and "non-zero diffuse reflectance" in err
+
+
+def test_a_scene_is_optimized_for_its_own_materials_by_default(pbrt, tmp_path, monkeypatch, capsys):
+    """Without --reflectances, optimize SCENE.pbrt takes the scene's materials (design §4.5);
+    without a renderer it warns and optimizes for the white surface; 'white' asks for it."""
+    import wavelength_pdf.cli.optimize as opt
+
+    seen = []
+    real = opt.optimize_one
+
+    def spy(*a, reflectances=None, **kw):
+        seen.append(None if reflectances is None else reflectances.name)
+        return real(*a, reflectances=reflectances, **kw)
+
+    monkeypatch.setattr(opt, "optimize_one", spy)
+    argv = ["optimize", f"{SCENE}#0", "-o", str(tmp_path / "t.csv"), "--grid-step", "20",
+            "--max-evals", "5", "--quiet"]
+    monkeypatch.setenv("WAVELENGTH_PDF_PBRT", str(pbrt))
+    cli.main(argv)
+    cli.main(argv + ["--reflectances", "white"])
+    monkeypatch.setenv("WAVELENGTH_PDF_PBRT", str(tmp_path / "no-pbrt"))
+    monkeypatch.setattr("wavelength_pdf.evaluation.render.in_checkout", lambda: False)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    cli.main(argv)
+    assert seen == ["scene", None, None]
+    assert "optimizing for a white surface" in capsys.readouterr().err

@@ -11,7 +11,7 @@ from typing import Sequence
 from wavelength_pdf.cli import (EXIT_NOT_ACCEPTED, PROG, SPECTRUM_HELP, BadInput, Formatter,
                                 check_solver, range_args, solver_args)
 from wavelength_pdf.produce import make_grid, optimize_one, safe_name, summary_line
-from wavelength_pdf.spectra import Spectrum, load_spectra
+from wavelength_pdf.spectra import Spectrum, SpectrumError, load_spectra
 
 
 def output_paths(spectra: Sequence[Spectrum], out: str) -> list[Path]:
@@ -70,6 +70,39 @@ def whole_scene(spec: str, lo: float, hi: float, pbrt: str | None) -> Spectrum:
     return whole_scene_spectrum(spec, lo=lo, hi=hi, pbrt=pbrt)
 
 
+def _scene_spec(spec: str) -> str | None:
+    """The scene file of a ``.pbrt`` spectrum spec (``scene.pbrt#N`` included), else None."""
+    base = spec.rsplit("#", 1)[0] if "#" in spec else spec
+    return base if base.lower().endswith(".pbrt") else None
+
+
+def surface_colours(choice: str | None, spec: str, lo: float, hi: float, pbrt: str | None):
+    """The surface colours J is taken over (design §4.5), or None for one white surface.
+
+    Without ``--reflectances``, a scene is optimized for its own materials (``scene``: on the
+    Cornell box under the compact fluorescent lamp it measured better than the white surface,
+    docs/whole-scenes.md); when the renderer cannot give them (none found, or no diffuse
+    material) a warning says so and the white surface is used. Other spectra use the white
+    surface unless ``--reflectances`` says otherwise; ``white`` asks for it explicitly."""
+    from wavelength_pdf.evaluation.render import RendererNotFound
+    from wavelength_pdf.reflectances import load_reflectances
+
+    if choice == "white":
+        return None
+    scene = _scene_spec(spec)
+    if choice is None:
+        if scene is None:
+            return None
+        try:
+            return load_reflectances("scene", scene=scene, lo=lo, hi=hi, pbrt=pbrt)
+        except (RendererNotFound, SpectrumError) as e:
+            print(f"{PROG}: warning: optimizing for a white surface: the scene's material "
+                  f"reflectances are not available ({e}); give --reflectances white to choose "
+                  "it", file=sys.stderr)
+            return None
+    return load_reflectances(choice, scene=scene, lo=lo, hi=hi, pbrt=pbrt)
+
+
 def cmd_optimize(args: argparse.Namespace) -> int:
     from wavelength_pdf.progress import OptimizationProgress
 
@@ -81,17 +114,13 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         if args.whole_scene:
             spectra = [whole_scene(args.spectrum, lo, hi, args.pbrt)]
         else:
-            if args.pbrt is not None and args.reflectances != "scene":
-                raise BadInput("--pbrt is only used with --whole-scene or --reflectances scene")
+            if args.pbrt is not None and not _scene_spec(args.spectrum):
+                raise BadInput("--pbrt is only used with a scene (--whole-scene, --reflectances "
+                               "scene or a .pbrt spectrum)")
             spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
-    reflectances = None
-    if args.reflectances is not None:
-        from wavelength_pdf.reflectances import load_reflectances
-
-        reflectances = load_reflectances(args.reflectances, scene=args.spectrum, lo=lo, hi=hi,
-                                         pbrt=args.pbrt)
+    reflectances = surface_colours(args.reflectances, args.spectrum, lo, hi, args.pbrt)
     paths = output_paths(spectra, args.output)
     several = len(spectra) > 1
     total = budget(args.solver, grid, args.max_evals)
@@ -134,9 +163,12 @@ def add_parser(sub, names: list[str]) -> None:
                    help="optimize for coloured surfaces instead of one white (design §4.5): J "
                         "is the mean of each colour's J and the health rules hold for every "
                         "colour. SET: 'scene' (the materials of the .pbrt scene, as the "
-                        "renderer builds them), 'colorchecker' (the 24 patches "
-                        "colour-science ships) or a CSV file (design §3.4: a wavelength "
-                        "column, then one column per reflectance)")
+                        "renderer builds them; the default for a .pbrt SPECTRUM, falling back "
+                        "to white with a warning when the renderer cannot give them), "
+                        "'colorchecker' (the 24 patches colour-science ships), 'white' (one "
+                        "white surface, design §4.1; the default for other spectra) or a CSV "
+                        "file (design §3.4: a wavelength column, then one column per "
+                        "reflectance)")
     o.add_argument("--pbrt", metavar="PATH", default=None,
                    help="with --whole-scene or --reflectances scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
                         "else the checkout's build/pbrt, else pbrt on PATH)")
