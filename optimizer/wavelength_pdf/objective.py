@@ -457,19 +457,31 @@ def _table_quadrature(P: Array, arr: dict, glx: Array, glw: Array):
     lam = grid[seg] + t
     # f on the node interval, the mixture on the table segment.
     wn = jnp.clip((lam - x[node]) / (x[node + 1] - x[node]), 0.0, 1.0)
+    if arr["spec"].ndim == 1:
+        # One white surface: exactly the operations (and order) the solvers were tuned on;
+        # a reordering changes rounding, and on hard lamps that moves the optimum found.
+        spec = arr["spec"][node] * (1.0 - wn) + arr["spec"][node + 1] * wn
+        cmf = arr["cmf"][node] * (1.0 - wn)[..., None] + arr["cmf"][node + 1] * wn[..., None]
+        f = spec[..., None] * cmf  # (4, n, 3)
+        w = t / (grid[seg + 1] - grid[seg])
+        msum = jnp.sum(PN[:, seg] * (1.0 - w)[None] + PN[:, seg + 1] * w[None], axis=0)
+        pos = msum > 0
+        ratio = jnp.where(pos[..., None], f / jnp.where(pos, msum, 1.0)[..., None], 0.0)
+        return u, wt, jnp.sum(ratio, axis=0), jnp.sum(ratio * ratio, axis=0)
     cmf = arr["cmf"][node] * (1.0 - wn)[..., None] + arr["cmf"][node + 1] * wn[..., None]
     w = t / (grid[seg + 1] - grid[seg])
     msum = jnp.sum(PN[:, seg] * (1.0 - w)[None] + PN[:, seg + 1] * w[None], axis=0)
     pos = msum > 0
-    inv = jnp.where(pos, 1.0 / jnp.where(pos, msum, 1.0), 0.0)
+    safe = jnp.where(pos, msum, 1.0)
 
-    # Everything above is the same for every surface colour; only f differs.
+    # Surface colours (design §4.5): everything above is shared; only f differs per colour.
     def terms(spec_nodes):
         spec = spec_nodes[node] * (1.0 - wn) + spec_nodes[node + 1] * wn
-        ratio = spec[..., None] * cmf * inv[..., None]  # (4, n, 3)
+        f = spec[..., None] * cmf  # (4, n, 3)
+        ratio = jnp.where(pos[..., None], f / safe[..., None], 0.0)
         return jnp.sum(ratio, axis=0), jnp.sum(ratio * ratio, axis=0)
 
-    C, D = jax.vmap(terms)(arr["spec"]) if arr["spec"].ndim == 2 else terms(arr["spec"])
+    C, D = jax.vmap(terms)(arr["spec"])
     return u, wt, C, D
 
 
@@ -590,9 +602,14 @@ def _moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Array):
     E[C^2] = (exact diagonal part, wavelength space) + (cross terms, u-quadrature): the
     quadrature only sees C^2 - sum_j (f_j / M_j)^2, which has no firefly peaks.
     """
-    J = _mean_over_colours(arr, jnp.sum(wt * _delta_e(arr, C), axis=-1))
-    m1 = jnp.sum(wt[:, None] * C, axis=-2)
-    cross = jnp.sum(wt[:, None] * (C * C - D), axis=-2)
+    if C.ndim == 2:  # one white surface, as before surface colours existed (see above)
+        J = jnp.sum(wt * _delta_e(arr, C))
+        m1 = jnp.sum(wt[:, None] * C, axis=0)
+        cross = jnp.sum(wt[:, None] * (C * C - D), axis=0)
+    else:
+        J = _mean_over_colours(arr, jnp.sum(wt * _delta_e(arr, C), axis=-1))
+        m1 = jnp.sum(wt[:, None] * C, axis=-2)
+        cross = jnp.sum(wt[:, None] * (C * C - D), axis=-2)
     c = arr["c"]
     m2 = diag_exact + cross - 2.0 * c * m1 + c * c
     return J, m1, m2
