@@ -47,12 +47,13 @@ class Health:
     Attributes
     ----------
     bias : float
-        max over channels of |E[C] - c| / c.
-    bias_xyz : (3,) array
+        max over channels (and surface colours) of |E[C] - c| / c.
+    bias_xyz : (3,) array, or (K, 3) with K surface colours (design §4.5)
         Signed relative bias per channel (E[C] - c) / c.
-    std : (3,) array
-        std(C(u)) / c per channel.
-    missing_mass : (3,) array
+    std : (3,) array, or (K, 3)
+        std(C(u)) / c per channel: the acceptance rule holds every colour's channels to
+        the initialization's.
+    missing_mass : (3,) array, or (K, 3)
         Fraction of each channel of c lying where the mixture density is zero.
     """
 
@@ -80,7 +81,7 @@ class Health:
         return rejection(self, reference)
 
     def summary(self) -> str:
-        s = self.std
+        s = self.std if np.ndim(self.std) == 1 else np.max(self.std, axis=0)
         return f"bias={self.bias:.2e} std/c=({s[0]:.4g},{s[1]:.4g},{s[2]:.4g})"
 
 
@@ -105,8 +106,13 @@ def rejection(health: "Health", reference: "Health | None" = None, J: float | No
     if reference is not None:
         worse = health.std > reference.std * (1.0 + STD_RTOL)
         if np.any(worse):
+            # With surface colours (design §4.5) std is (K, 3): name the first colour too.
+            where = ""
+            if worse.ndim == 2:
+                k = int(np.flatnonzero(worse.any(axis=1))[0])
+                where, worse = f" of surface colour #{k}", worse[k]
             ch = ",".join("XYZ"[i] for i in np.flatnonzero(worse))
-            return f"std/c worse than the initialization's in channel(s) {ch}"
+            return f"std/c worse than the initialization's in channel(s) {ch}{where}"
     if J is not None and J_uniform is not None:
         if not np.isfinite(J):
             return f"J is {J}"
@@ -133,8 +139,9 @@ def _mean_in_wavelength(arr: dict, P: jax.Array, glx: jax.Array, glw: jax.Array)
     m = jnp.sum(pk, axis=0)
     pos = m > 0
     share = jnp.where(pos[None], pk / jnp.where(pos, m, 1.0)[None], 0.0)
-    mean = jnp.sum(jnp.sum(share, axis=0)[..., None] * f * wt[..., None], axis=(0, 1))
-    lost = jnp.sum(jnp.where(pos, 0.0, 1.0)[..., None] * f * wt[..., None], axis=(0, 1))
+    # f is (n, g, 3), or (K, n, g, 3) with surface colours (design §4.5).
+    mean = jnp.sum(jnp.sum(share, axis=0)[..., None] * f * wt[..., None], axis=(-3, -2))
+    lost = jnp.sum(jnp.where(pos, 0.0, 1.0)[..., None] * f * wt[..., None], axis=(-3, -2))
     return mean, lost
 
 
@@ -164,4 +171,4 @@ def uniform_health(problem: Problem) -> Health:
     c = problem.c
     b = (m1 - c) / c
     std = np.sqrt(np.maximum(m2 - (m1 - c) ** 2, 0.0)) / c
-    return Health(bias=float(np.max(np.abs(b))), bias_xyz=b, std=std, missing_mass=np.zeros(3))
+    return Health(bias=float(np.max(np.abs(b))), bias_xyz=b, std=std, missing_mass=np.zeros(np.shape(c)))

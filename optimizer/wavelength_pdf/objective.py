@@ -106,6 +106,16 @@ class Problem:
         Lab of the target (D65 white, Y = 1).
     scale : float
         Factor that took the spectrum's values to the scaled ``spec``.
+    weights : (K,) float64 array or None
+        With a set of surface reflectances (design §4.5): the weight of each colour in J
+        (summing to 1); None for the white surface of §4.1.
+    refl : (K, Nf) float64 array or None
+        The reflectances at ``nodes``. With them, ``spec`` is still the lamp alone (scaled
+        so that the white surface's colour has Y = 1, as without reflectances), ``c`` and
+        ``lab_c`` are per colour, (K, 3), and the arrays the jitted functions see carry
+        ``spec`` per colour, (K, Nf): I * R_k at the nodes.
+    reflectance_set : str
+        The set's name ('' without reflectances).
     """
 
     name: str
@@ -119,6 +129,14 @@ class Problem:
     lab_c: np.ndarray
     scale: float
     arrays: dict = field(repr=False, compare=False, default_factory=dict)
+    weights: np.ndarray | None = None
+    refl: np.ndarray | None = None
+    reflectance_set: str = ""
+
+    @property
+    def batched(self) -> bool:
+        """Whether J is the weighted mean over a set of surface colours (design §4.5)."""
+        return self.weights is not None
 
 
 def _with_ramps(wl: np.ndarray, val: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -154,7 +172,7 @@ def _exact_integral(nodes: np.ndarray, spec: np.ndarray, cmf: np.ndarray) -> np.
     return np.sum(h[:, None] * (f0 + 4.0 * fm + f1) / 6.0, axis=0)
 
 
-def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID) -> Problem:
+def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID, reflectances=None) -> Problem:
     """Build the objective's data for ``spectrum`` on the table ``grid``.
 
     Parameters
@@ -164,6 +182,12 @@ def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID) -> Problem:
         ``source``; linear between samples and zero outside them.
     grid : (M+1,) array, nm
         Strictly increasing table nodes.
+    reflectances : wavelength_pdf.reflectances.ReflectanceSet, optional
+        Surface colours (design §4.5): J becomes the weighted mean over them of J with
+        f = I * R_k * cmf. Each reflectance is linear between its own samples and keeps its
+        end values beyond them; its samples join the union of nodes, and I * R_k is taken
+        linear between the union's nodes (the form in which the estimator and its target
+        both see it, so the target stays the estimator's exact mean).
 
     Raises
     ------
@@ -196,18 +220,28 @@ def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID) -> Problem:
     cwl, cval = colorimetry.cmfs()
     cwl_r = np.concatenate([[cwl[0] - _JUMP_RAMP_NM], cwl, [cwl[-1] + _JUMP_RAMP_NM]])
     cval_r = np.concatenate([np.zeros((1, 3)), cval, np.zeros((1, 3))])
-    nodes = np.unique(np.concatenate([swl, cwl_r, grid]))
+    parts = [swl, cwl_r, grid]
+    if reflectances is not None:
+        rwl = np.asarray(reflectances.wavelengths, dtype=np.float64)
+        parts.append(rwl[(rwl > lo) & (rwl < hi)])
+    nodes = np.unique(np.concatenate(parts))
     nodes = nodes[(nodes >= lo) & (nodes <= hi)]
     check_objective_nodes(nodes.size, grid.size, source)
     spec = np.interp(nodes, swl, sval, left=0.0, right=0.0)
     cmf = np.stack([np.interp(nodes, cwl_r, cval_r[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
-
-    return _from_nodes(name, source, grid, nodes, spec, cmf)
+    if reflectances is None:
+        return _from_nodes(name, source, grid, nodes, spec, cmf)
+    refl = np.stack([np.interp(nodes, rwl, r) for r in np.asarray(reflectances.values, dtype=np.float64)])
+    return _from_nodes(name, source, grid, nodes, spec, cmf, refl=refl,
+                       weights=np.asarray(reflectances.weights, dtype=np.float64),
+                       reflectance_set=reflectances.name)
 
 
 def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spec: np.ndarray,
-                cmf: np.ndarray) -> Problem:
-    """Problem from the spectrum and CMFs given at the union nodes (inside the range)."""
+                cmf: np.ndarray, refl: np.ndarray | None = None, weights: np.ndarray | None = None,
+                reflectance_set: str = "") -> Problem:
+    """Problem from the spectrum and CMFs (and reflectances, (K, n)) given at the union
+    nodes (inside the range)."""
     lo, hi = float(grid[0]), float(grid[-1])
     # Scale: first to a maximum of 1 (so that 1e-30 or 1e30 spectra behave alike), then
     # so that the exact target has Y = 1.
@@ -223,6 +257,17 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     c = _exact_integral(nodes, spec, cmf)
     c = c / c[1]  # Y exactly 1
     lab_c = np.asarray(_xyz_to_lab_jit(c))
+    spec_arr = spec
+    if refl is not None:
+        # Each colour relative to the white surface under the same lamp (Y = 1), in Lab
+        # relative to D65 at Y = 1 (design §4.5).
+        spec_arr = spec[None, :] * refl
+        c = np.stack([_exact_integral(nodes, s, cmf) for s in spec_arr])
+        if not np.all(c[:, 1] > 0):
+            k = int(np.flatnonzero(~(c[:, 1] > 0))[0])
+            raise ValueError(f"{source}: surface colour #{k} of {reflectance_set!r} reflects "
+                             f"nothing of this lamp (Y = 0) over {lo:g}-{hi:g} nm")
+        lab_c = np.asarray(colorimetry.xyz_to_lab(c))
 
     # Padding: node arrays continue past hi (never reached) with zero values.
     n_nodes = nodes.size
@@ -231,6 +276,7 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     nodes_p = np.concatenate([nodes, hi + 1.0 + np.arange(extra, dtype=np.float64)])
     spec_p = np.concatenate([spec, np.zeros(extra)])
     cmf_p = np.concatenate([cmf, np.zeros((extra, 3))])
+    spec_arr_p = np.concatenate([spec_arr, np.zeros(spec_arr.shape[:-1] + (extra,))], axis=-1)
     # Breakpoint wavelengths (padded with hi: duplicates give empty u-pieces) and their
     # table segments, fixed for the problem.
     bp = np.concatenate([nodes, np.full(extra, hi)])
@@ -244,7 +290,7 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     arrays = {
         "grid": np.asarray(grid),
         "nodes": np.asarray(nodes_p),
-        "spec": np.asarray(spec_p),
+        "spec": np.asarray(spec_arr_p),
         "cmf": np.asarray(cmf_p),
         "bp": np.asarray(bp),
         "bp_seg": np.asarray(bp_seg),
@@ -254,12 +300,19 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
         "lab_c": np.asarray(lab_c),
         "c": np.asarray(c),
     }
+    refl_p = None
+    if refl is not None:
+        w = np.asarray(weights, dtype=np.float64)
+        arrays["weights"] = np.asarray(w / w.sum())
+        refl_p = np.concatenate([refl, np.zeros((refl.shape[0], extra))], axis=1)
     # One transfer, not jnp.asarray per array (each compiles a staging function per
     # shape outside a trace: a dozen compilations per process).
     arrays = jax.device_put(arrays)
     return Problem(
         name=name, source=source, grid=grid, nodes=nodes_p, spec=spec_p, cmf=cmf_p,
         n_nodes=n_nodes, c=c, lab_c=lab_c, scale=scale, arrays=arrays,
+        weights=None if refl is None else np.asarray(arrays["weights"]), refl=refl_p,
+        reflectance_set=reflectance_set,
     )
 
 
@@ -305,23 +358,33 @@ def simplify(problem: Problem, rel_tol: float) -> Problem:
         return problem
     n = problem.n_nodes
     x = problem.nodes[:n]
-    Y = np.column_stack([problem.spec[:n], problem.cmf[:n]])
+    cols = [problem.spec[:n, None], problem.cmf[:n]]
+    if problem.batched:
+        cols.append(problem.refl[:, :n].T)
+    Y = np.column_stack(cols)
     tol = rel_tol * np.maximum(np.max(Y, axis=0), 1e-300)
     keep = _polyline_keep(x, Y, tol) | np.isin(x, problem.grid)
-    return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:])
+    if not problem.batched:
+        return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4])
+    return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4],
+                       refl=Y[keep, 4:].T, weights=problem.weights,
+                       reflectance_set=problem.reflectance_set)
 
 
 # --- Pure functions of (densities, problem arrays) -----------------------------------
 
 
 def f_at(arr: dict, lam: Array) -> Array:
-    """f(lam) = I(lam) * cmf(lam), shape lam.shape + (3,); zero outside the grid range."""
+    """f(lam) = I(lam) * cmf(lam), shape lam.shape + (3,); zero outside the grid range.
+
+    With surface colours (design §4.5) f = I R_k cmf for every colour k, shape
+    (K,) + lam.shape + (3,)."""
     x = arr["nodes"]
     n = x.shape[0]
     i = jnp.clip(jnp.searchsorted(x, lam, side="right") - 1, 0, n - 2)
     w = (lam - x[i]) / (x[i + 1] - x[i])
     w = jnp.clip(w, 0.0, 1.0)
-    spec = arr["spec"][i] * (1.0 - w) + arr["spec"][i + 1] * w
+    spec = arr["spec"][..., i] * (1.0 - w) + arr["spec"][..., i + 1] * w
     cmf = arr["cmf"][i] * (1.0 - w)[..., None] + arr["cmf"][i + 1] * w[..., None]
     inside = (lam >= x[0]) & (lam <= arr["bp"][-1])
     return jnp.where(inside[..., None], spec[..., None] * cmf, 0.0)
@@ -361,10 +424,10 @@ def _table_estimate(arr: dict, PN: Array, FF: Array, u: Array) -> Array:
     w = t / (grid[seg + 1] - grid[seg])
     # sum_k p_k(lambda_j): every density is linear on the segment lambda_j fell into.
     msum = jnp.sum(PN[:, seg] * (1.0 - w)[None] + PN[:, seg + 1] * w[None], axis=0)
-    f = f_at(arr, lam)  # (4, n, 3)
+    f = f_at(arr, lam)  # ([K,] 4, n, 3)
     pos = msum > 0
     ratio = jnp.where(pos[..., None], f / jnp.where(pos, msum, 1.0)[..., None], 0.0)
-    return jnp.sum(ratio, axis=0)
+    return jnp.sum(ratio, axis=-3)
 
 
 def _table_quadrature(P: Array, arr: dict, glx: Array, glw: Array):
@@ -399,23 +462,48 @@ def _table_quadrature(P: Array, arr: dict, glx: Array, glw: Array):
     lam = grid[seg] + t
     # f on the node interval, the mixture on the table segment.
     wn = jnp.clip((lam - x[node]) / (x[node + 1] - x[node]), 0.0, 1.0)
-    spec = arr["spec"][node] * (1.0 - wn) + arr["spec"][node + 1] * wn
+    if arr["spec"].ndim == 1:
+        # One white surface: exactly the operations (and order) the solvers were tuned on;
+        # a reordering changes rounding, and on hard lamps that moves the optimum found.
+        spec = arr["spec"][node] * (1.0 - wn) + arr["spec"][node + 1] * wn
+        cmf = arr["cmf"][node] * (1.0 - wn)[..., None] + arr["cmf"][node + 1] * wn[..., None]
+        f = spec[..., None] * cmf  # (4, n, 3)
+        w = t / (grid[seg + 1] - grid[seg])
+        msum = jnp.sum(PN[:, seg] * (1.0 - w)[None] + PN[:, seg + 1] * w[None], axis=0)
+        pos = msum > 0
+        ratio = jnp.where(pos[..., None], f / jnp.where(pos, msum, 1.0)[..., None], 0.0)
+        return u, wt, jnp.sum(ratio, axis=0), jnp.sum(ratio * ratio, axis=0)
     cmf = arr["cmf"][node] * (1.0 - wn)[..., None] + arr["cmf"][node + 1] * wn[..., None]
-    f = spec[..., None] * cmf  # (4, n, 3)
     w = t / (grid[seg + 1] - grid[seg])
     msum = jnp.sum(PN[:, seg] * (1.0 - w)[None] + PN[:, seg + 1] * w[None], axis=0)
     pos = msum > 0
-    ratio = jnp.where(pos[..., None], f / jnp.where(pos, msum, 1.0)[..., None], 0.0)
-    return u, wt, jnp.sum(ratio, axis=0), jnp.sum(ratio * ratio, axis=0)
+    safe = jnp.where(pos, msum, 1.0)
+
+    # Surface colours (design §4.5): everything above is shared; only f differs per colour.
+    def terms(spec_nodes):
+        spec = spec_nodes[node] * (1.0 - wn) + spec_nodes[node + 1] * wn
+        f = spec[..., None] * cmf  # (4, n, 3)
+        ratio = jnp.where(pos[..., None], f / safe[..., None], 0.0)
+        return jnp.sum(ratio, axis=0), jnp.sum(ratio * ratio, axis=0)
+
+    C, D = jax.vmap(terms)(arr["spec"])
+    return u, wt, C, D
 
 
 def _delta_e(arr: dict, C: Array) -> Array:
-    return colorimetry.delta_e_2000(colorimetry.xyz_to_lab(C), arr["lab_c"])
+    """CIEDE2000 of C(u) ((n, 3), or (K, n, 3) with surface colours) against the target."""
+    lab_c = arr["lab_c"][:, None, :] if C.ndim == 3 else arr["lab_c"]
+    return colorimetry.delta_e_2000(colorimetry.xyz_to_lab(C), lab_c)
+
+
+def _mean_over_colours(arr: dict, per_colour: Array) -> Array:
+    """J from the per-colour J's: itself, or their weighted mean (design §4.5)."""
+    return jnp.sum(arr["weights"] * per_colour) if "weights" in arr else per_colour
 
 
 def _table_J(P: Array, arr: dict, glx: Array, glw: Array) -> Array:
     u, wt, C, _ = _table_quadrature(P, arr, glx, glw)
-    return jnp.sum(wt * _delta_e(arr, C))
+    return _mean_over_colours(arr, jnp.sum(wt * _delta_e(arr, C), axis=-1))
 
 
 # --- The second moment: diagonal part exactly in wavelength space -----------------------
@@ -477,6 +565,13 @@ def _quartic_over_linear(e: Array, a: Array, b: Array, h: Array) -> Array:
 
 
 def _diag_second_moment(arr: dict, msum_nodes: Array) -> Array:
+    """Integral of f^2 / M, per channel ((K, 3) with surface colours); see ``_diag_one``."""
+    if arr["spec"].ndim == 2:
+        return jax.vmap(lambda s: _diag_one({**arr, "spec": s}, msum_nodes))(arr["spec"])
+    return _diag_one(arr, msum_nodes)
+
+
+def _diag_one(arr: dict, msum_nodes: Array) -> Array:
     """Integral of f^2 / M over the grid range, per channel, exactly.
 
     M = sum_k p_k is the mixture (times 4) given at the table nodes. This is the part
@@ -521,9 +616,14 @@ def _moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Array):
     E[C^2] = (exact diagonal part, wavelength space) + (cross terms, u-quadrature): the
     quadrature only sees C^2 - sum_j (f_j / M_j)^2, which has no firefly peaks.
     """
-    J = jnp.sum(wt * _delta_e(arr, C))
-    m1 = jnp.sum(wt[:, None] * C, axis=0)
-    cross = jnp.sum(wt[:, None] * (C * C - D), axis=0)
+    if C.ndim == 2:  # one white surface, as before surface colours existed (see above)
+        J = jnp.sum(wt * _delta_e(arr, C))
+        m1 = jnp.sum(wt[:, None] * C, axis=0)
+        cross = jnp.sum(wt[:, None] * (C * C - D), axis=0)
+    else:
+        J = _mean_over_colours(arr, jnp.sum(wt * _delta_e(arr, C), axis=-1))
+        m1 = jnp.sum(wt[:, None] * C, axis=-2)
+        cross = jnp.sum(wt[:, None] * (C * C - D), axis=-2)
     c = arr["c"]
     m2 = diag_exact + cross - 2.0 * c * m1 + c * c
     return J, m1, m2
@@ -553,7 +653,7 @@ def _uniform_terms(arr: dict, u: Array) -> Array:
 
 def _uniform_estimate(arr: dict, u: Array) -> Array:
     """Stratified uniform C(u) = (hi - lo) / 4 * sum_j f(lambda_j)."""
-    return jnp.sum(_uniform_terms(arr, u), axis=0)
+    return jnp.sum(_uniform_terms(arr, u), axis=-3)
 
 
 def _uniform_moments(arr: dict, glx: Array, glw: Array):
@@ -561,7 +661,7 @@ def _uniform_moments(arr: dict, glx: Array, glw: Array):
     u, wt = _pieces(_uniform_breaks(arr, grid[0], grid[-1]), glx, glw)
     terms = _uniform_terms(arr, u)
     msum = jnp.sum(sampling.stratified_uniform_table(grid), axis=0)
-    return _moments(arr, wt, jnp.sum(terms, axis=0), jnp.sum(terms * terms, axis=0),
+    return _moments(arr, wt, jnp.sum(terms, axis=-3), jnp.sum(terms * terms, axis=-3),
                     _diag_second_moment(arr, msum))
 
 

@@ -79,6 +79,7 @@ def optimize_spectrum(
     progress: Callable[[int, float], None] | None = None,
     max_seconds: float | None = None,
     solver_options: dict | None = None,
+    reflectances=None,
 ) -> Result:
     """Find four wavelength densities on ``grid`` that minimize J for ``spectrum``.
 
@@ -110,6 +111,9 @@ def optimize_spectrum(
         uniform sampling's.
     solver_options : dict, optional
         Extra keyword arguments for the solver (e.g. ``{"max_evals": 300}``).
+    reflectances : wavelength_pdf.reflectances.ReflectanceSet, optional
+        Surface colours (design §4.5): J is the weighted mean of every colour's J, and the
+        health rules hold for every colour. The grid ("auto") is still chosen for the lamp.
 
     Raises
     ------
@@ -130,7 +134,7 @@ def optimize_spectrum(
     if auto and grid != "auto":
         raise ValueError(f"grid must be an array of wavelengths or 'auto', not {grid!r}")
     grid = _auto_grid(spectrum) if auto else np.asarray(grid, dtype=np.float64)
-    problem = objective.make_problem(spectrum, grid)
+    problem = objective.make_problem(spectrum, grid, reflectances)
     P0 = init_mod.equal_mass_partition(problem)
     # The reference figures every result reports, before the search: under a time cap
     # their compiling counts against it, and the search gets what is left.
@@ -166,21 +170,30 @@ def optimize_spectrum(
         Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=J_uniform,
         J_init=J_init, health=health_mod.health(problem, P),
         health_init=health_init, name=getattr(spectrum, "name", ""),
-        source=getattr(spectrum, "source", ""), solver=solver, seed=seed, history=history,
+        source=_source(spectrum, reflectances), solver=solver, seed=seed, history=history,
         message=run.message)
     result.seconds = time.monotonic() - t0
     return result
 
 
+def _source(spectrum, reflectances) -> str:
+    """The record's ``source``: the spectrum's, and the surface colours J was taken over."""
+    src = getattr(spectrum, "source", "")
+    if reflectances is None:
+        return src
+    return f"{src}; reflectances: {reflectances.name} ({len(reflectances)} colours, {reflectances.source})"
+
+
 @float64
-def evaluate_table(spectrum, table: Table) -> Result:
+def evaluate_table(spectrum, table: Table, reflectances=None) -> Result:
     """Score any table (e.g. a reference table) for ``spectrum`` with the project's
     evaluator: the same record as :func:`optimize_spectrum`, judged by the same rule
-    against the equal-mass initialization on the table's grid (``solver`` is '')."""
+    against the equal-mass initialization on the table's grid (``solver`` is ''); with
+    ``reflectances``, over those surface colours (design §4.5)."""
     t0 = time.monotonic()
     objective.enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
-    problem = objective.make_problem(spectrum, grid)
+    problem = objective.make_problem(spectrum, grid, reflectances)
     P = _normalize_rows(grid, table.pdfs)
     P0 = init_mod.equal_mass_partition(problem)
     J, J_fine = objective.J_pair(problem, P)
@@ -188,6 +201,6 @@ def evaluate_table(spectrum, table: Table) -> Result:
         Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=objective.uniform_J(problem),
         J_init=objective.J(problem, P0), health=health_mod.health(problem, P),
         health_init=health_mod.health(problem, P0), name=getattr(spectrum, "name", ""),
-        source=getattr(spectrum, "source", ""))
+        source=_source(spectrum, reflectances))
     result.seconds = time.monotonic() - t0
     return result

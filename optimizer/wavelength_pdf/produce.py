@@ -122,7 +122,7 @@ class Outcome:
 def optimize_one(spectrum: Spectrum, path: Path, grid: np.ndarray | str, solver: str | None,
                  seed: int, max_seconds: float | None, progress: Callable | None,
                  colour_bar: Path | None = None, plot: Path | None = None,
-                 max_evals: int | None = None) -> Outcome:
+                 max_evals: int | None = None, reflectances=None) -> Outcome:
     """Optimize one spectrum; write its table (only if accepted) and the optional images.
 
     Every output path is checked first (:func:`check_output_path`), before the optimization.
@@ -139,6 +139,8 @@ def optimize_one(spectrum: Spectrum, path: Path, grid: np.ndarray | str, solver:
         kwargs["solver"] = solver
     if max_evals is not None:
         kwargs["solver_options"] = {"max_evals": int(max_evals)}
+    if reflectances is not None:
+        kwargs["reflectances"] = reflectances
     result = optimize_spectrum(spectrum, **kwargs)
     table = result.to_table()
     if result.accepted:

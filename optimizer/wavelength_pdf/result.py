@@ -50,6 +50,12 @@ def _floats(text: str | None) -> np.ndarray:
     return np.array(vals if len(vals) == 3 else _NAN3, dtype=float)
 
 
+def _per_channel(std) -> np.ndarray:
+    """std/c per channel; with surface colours (design §4.5) the largest over the colours."""
+    a = np.asarray(std, dtype=float)
+    return (a if a.ndim == 1 else np.max(a, axis=0)).copy()
+
+
 @dataclass
 class Result:
     """An optimized (or scored) table for one spectrum and how good it is.
@@ -118,8 +124,7 @@ class Result:
 
         return cls(table=table, J=float(J), J_fine=float(J_fine), J_uniform=float(J_uniform),
                    J_init=float(J_init), bias_rel=float(health.bias),
-                   std_rel=np.asarray(health.std, dtype=float).copy(),
-                   init_std_rel=np.asarray(health_init.std, dtype=float).copy(),
+                   std_rel=_per_channel(health.std), init_std_rel=_per_channel(health_init.std),
                    reason=rejection(health, health_init, float(J), float(J_uniform)),
                    health=health, health_init=health_init, **rest)
 

@@ -58,6 +58,7 @@ __all__ = [
     "scene_spectra",
     "select_emitter",
     "read_scene",
+    "whole_scene_spectrum",
     "named_spectrum",
     "NAMED_SPECTRA",
 ]
@@ -372,3 +373,51 @@ def select_emitter(spectra: list[Spectrum], selector: str, scene: str | Path) ->
                 return sp
     listing = "; ".join(f"#{i}: {s.name} ({s.source})" for i, s in enumerate(spectra))
     raise SpectrumError(f"{scene}: no emitter {selector!r}; the scene has {listing}")
+
+
+def whole_scene_spectrum(path: str | Path, lo: float = 380.0, hi: float = 780.0,
+                         pbrt: str | os.PathLike | None = None) -> Spectrum:
+    """The scene's total emitted spectral power, the renderer's own account of it.
+
+    Runs ``pbrt --emission-spectrum`` (design §5.6): every light's spectrum weighted by the
+    power it emits in that scene (area, scale, two-sidedness, transforms, pbrt-v4's light
+    power), summed. The renderer is the authority here because only it builds the scene
+    (areas after transforms, per-triangle ``power``, RGB and blackbody emission, the scene
+    radius of infinite lights); this module only reads statements. The renderer is found as
+    the evaluation finds it (``pbrt``, else ``$WAVELENGTH_PDF_PBRT``, else the checkout's
+    ``build/pbrt``, else ``pbrt`` on ``PATH``; design §7).
+
+    Raises
+    ------
+    SpectrumError
+        The scene is missing, the renderer refuses it (a scene with no emitters, a syntax
+        error: its message, naming file and line), or the total has no energy in
+        ``[lo, hi]``.
+    wavelength_pdf.evaluation.render.RendererNotFound
+        No renderer.
+    """
+    import subprocess
+    import tempfile
+
+    from wavelength_pdf.evaluation.render import find_pbrt
+
+    scene = Path(path)
+    if not scene.is_file():
+        raise SpectrumError(f"{scene}: no such scene file" if not scene.exists()
+                            else f"{scene}: not a file")
+    binary = find_pbrt(pbrt)
+    with tempfile.TemporaryDirectory(prefix="wavelength-pdf-emission-") as tmp:
+        out = Path(tmp) / f"{_label(scene)}-whole-scene.spd"
+        proc = subprocess.run([str(binary), "--quiet", "--emission-spectrum", str(out), str(scene)],
+                              capture_output=True, text=True)
+        if proc.returncode != 0 or not out.is_file():
+            msg = " ".join(line.removeprefix("pbrt: ") for line in proc.stderr.splitlines()
+                           if line.strip() and "warning:" not in line)
+            raise SpectrumError(f"{scene}: the renderer ({binary}) cannot give the scene's "
+                                f"emission: {msg or f'exit status {proc.returncode}'}")
+        sp = read_spd(out, lo=None, hi=None)
+    sp = Spectrum(name=f"{_label(scene)}-whole-scene", source=f"{scene} (all emitters, "
+                  f"weighted by power: pbrt --emission-spectrum)", wavelengths=sp.wavelengths,
+                  values=sp.values)
+    check_support(sp, lo, hi, where=str(scene))
+    return sp

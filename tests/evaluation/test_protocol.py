@@ -161,3 +161,29 @@ def test_render_reports_progress_and_the_renderer_s_errors(tmp_path, cornell, pb
     for progress in (None, seen.append):
         with pytest.raises(rendering.RenderError, match=r"bad\.pbrt:2"):
             rendering.render(bad, tmp_path / "b.exr", uniform, 4, pbrt=pbrt, on_percent=progress)
+
+
+def test_whole_scene_keeps_the_scenes_own_lamps(tmp_path, repo, pbrt, capsys) -> None:
+    """``evaluate SCENE whole-scene``: the scene copy keeps both of its lamps (their spectra as
+    written), and every method gets its rows."""
+    scene = repo / "scenes" / "cornell-box-two-lamps" / "scene.pbrt"
+    code = main(["evaluate", str(scene), "whole-scene", "--table", str(TABLE), "-o", str(tmp_path),
+                 "--spp", "4", "--truth-spp", "64", "--truth-method", "uniform", "--resolution", "12x12",
+                 "--methods", "uniform", "table", "--pbrt", str(pbrt), "--nthreads", "2"])
+    assert code == 0, capsys.readouterr().err
+    copy = (tmp_path / "scene.pbrt").read_text()
+    assert "tri-band-fluorescent.spd" in copy and "high-pressure-sodium.spd" in copy
+    rows = (tmp_path / "results.csv").read_text().splitlines()
+    assert len(rows) == 3 and "cornell-box-two-lamps-whole-scene" in rows[1]
+
+
+def test_whole_scene_and_reflectances_bad_input_exit_2(tmp_path, repo, capsys) -> None:
+    dark = tmp_path / "dark.pbrt"
+    dark.write_text('WorldBegin\nShape "sphere"\n')
+    assert main(["evaluate", str(dark), "whole-scene", "-o", str(tmp_path / "o")]) == 2
+    assert "no emitters" in capsys.readouterr().err
+    bad = tmp_path / "refl.csv"
+    bad.write_text("lambda,a\n400,nan\n500,0.5\n")
+    scene = repo / "scenes" / "cornell-box" / "scene.pbrt"
+    assert main(["evaluate", str(scene), "cie:FL2", "--reflectances", str(bad), "-o", str(tmp_path / "o")]) == 2
+    assert f"{bad}:2: reflectance 'a' is nan" in capsys.readouterr().err

@@ -39,7 +39,7 @@ def _fake_optimizer(monkeypatch, accepted: bool = True) -> list:
     calls: list = []
 
     def optimize_spectrum(spectrum, grid="auto", solver=None, seed=0, progress=None,
-                          max_seconds=None, solver_options=None):
+                          max_seconds=None, solver_options=None, reflectances=None):
         calls.append(spectrum.name)
         if isinstance(grid, str):  # "auto": the stand-in keeps the default 5 nm grid
             grid = np.arange(380.0, 781.0, 5.0)

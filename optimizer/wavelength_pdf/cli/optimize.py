@@ -11,7 +11,7 @@ from typing import Sequence
 from wavelength_pdf.cli import (EXIT_NOT_ACCEPTED, PROG, SPECTRUM_HELP, BadInput, Formatter,
                                 check_solver, range_args, solver_args)
 from wavelength_pdf.produce import make_grid, optimize_one, safe_name, summary_line
-from wavelength_pdf.spectra import Spectrum, load_spectra
+from wavelength_pdf.spectra import Spectrum, SpectrumError, load_spectra
 
 
 def output_paths(spectra: Sequence[Spectrum], out: str) -> list[Path]:
@@ -60,6 +60,49 @@ def budget(solver: str | None, grid, max_evals: int | None) -> int:
                              {"max_evals": max_evals} if max_evals else None)
 
 
+def whole_scene(spec: str, lo: float, hi: float, pbrt: str | None) -> Spectrum:
+    """``--whole-scene``: the scene's total emission, from the renderer (design §5.6)."""
+    from wavelength_pdf.scene_spectra import whole_scene_spectrum
+
+    if not spec.lower().endswith(".pbrt"):
+        raise BadInput(f"--whole-scene needs a pbrt-v4 scene (.pbrt), not {spec!r} (a scene's "
+                       "emitters are summed; scene.pbrt#N picks one emitter instead)")
+    return whole_scene_spectrum(spec, lo=lo, hi=hi, pbrt=pbrt)
+
+
+def _scene_spec(spec: str) -> str | None:
+    """The scene file of a ``.pbrt`` spectrum spec (``scene.pbrt#N`` included), else None."""
+    base = spec.rsplit("#", 1)[0] if "#" in spec else spec
+    return base if base.lower().endswith(".pbrt") else None
+
+
+def surface_colours(choice: str | None, spec: str, lo: float, hi: float, pbrt: str | None):
+    """The surface colours J is taken over (design §4.5), or None for one white surface.
+
+    Without ``--reflectances``, a scene is optimized for its own materials (``scene``: on the
+    Cornell box under the compact fluorescent lamp it measured better than the white surface,
+    docs/whole-scenes.md); when the renderer cannot give them (none found, or no diffuse
+    material) a warning says so and the white surface is used. Other spectra use the white
+    surface unless ``--reflectances`` says otherwise; ``white`` asks for it explicitly."""
+    from wavelength_pdf.evaluation.render import RendererNotFound
+    from wavelength_pdf.reflectances import load_reflectances
+
+    if choice == "white":
+        return None
+    scene = _scene_spec(spec)
+    if choice is None:
+        if scene is None:
+            return None
+        try:
+            return load_reflectances("scene", scene=scene, lo=lo, hi=hi, pbrt=pbrt)
+        except (RendererNotFound, SpectrumError) as e:
+            print(f"{PROG}: warning: optimizing for a white surface: the scene's material "
+                  f"reflectances are not available ({e}); give --reflectances white to choose "
+                  "it", file=sys.stderr)
+            return None
+    return load_reflectances(choice, scene=scene, lo=lo, hi=hi, pbrt=pbrt)
+
+
 def cmd_optimize(args: argparse.Namespace) -> int:
     from wavelength_pdf.progress import OptimizationProgress
 
@@ -68,9 +111,16 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     check_solver(args.solver)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
+        if args.whole_scene:
+            spectra = [whole_scene(args.spectrum, lo, hi, args.pbrt)]
+        else:
+            if args.pbrt is not None and not _scene_spec(args.spectrum):
+                raise BadInput("--pbrt is only used with a scene (--whole-scene, --reflectances "
+                               "scene or a .pbrt spectrum)")
+            spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+    reflectances = surface_colours(args.reflectances, args.spectrum, lo, hi, args.pbrt)
     paths = output_paths(spectra, args.output)
     several = len(spectra) > 1
     total = budget(args.solver, grid, args.max_evals)
@@ -80,7 +130,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         try:
             out = optimize_one(sp, path, grid, args.solver, args.seed, args.max_seconds, bar,
                                _suffix_path(args.colour_bar, sp, several),
-                               _suffix_path(args.plot, sp, several), max_evals=args.max_evals)
+                               _suffix_path(args.plot, sp, several), max_evals=args.max_evals,
+                               reflectances=reflectances)
         finally:
             bar.close()
         print(summary_line(out.result, path if out.written else None))
@@ -103,6 +154,24 @@ def add_parser(sub, names: list[str]) -> None:
     o.add_argument("-o", "--output", required=True, metavar="TABLE",
                    help="output table (.csv); for a scene with several emitters, a "
                         "directory (ending in '/') or a pattern with {name} or {index}")
+    o.add_argument("--whole-scene", action="store_true",
+                   help="SPECTRUM is a pbrt-v4 scene: write ONE table for the light of the "
+                        "whole scene, every emitter's spectrum weighted by the power it emits "
+                        "there, as the renderer computes it (pbrt --emission-spectrum, "
+                        "design §5.6); the table covers every lamp")
+    o.add_argument("--reflectances", metavar="SET", default=None,
+                   help="optimize for coloured surfaces instead of one white (design §4.5): J "
+                        "is the mean of each colour's J and the health rules hold for every "
+                        "colour. SET: 'scene' (the materials of the .pbrt scene, as the "
+                        "renderer builds them; the default for a .pbrt SPECTRUM, falling back "
+                        "to white with a warning when the renderer cannot give them), "
+                        "'colorchecker' (the 24 patches colour-science ships), 'white' (one "
+                        "white surface, design §4.1; the default for other spectra) or a CSV "
+                        "file (design §3.4: a wavelength column, then one column per "
+                        "reflectance)")
+    o.add_argument("--pbrt", metavar="PATH", default=None,
+                   help="with --whole-scene or --reflectances scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
+                        "else the checkout's build/pbrt, else pbrt on PATH)")
     solver_args(o, names)
     range_args(o)
     o.add_argument("--colour-bar", "--color-bar", dest="colour_bar", metavar="PNG",

@@ -97,15 +97,15 @@ def render_task(job: RenderJob, nthreads: int | None, slots: dict[str, int], *af
     return job.run(_threads_here(nthreads, slots))
 
 
-def table_task(spectrum: Spectrum, path: Path, lo: float, hi: float) -> Path:
+def table_task(spectrum: Spectrum, path: Path, lo: float, hi: float, reflectances=None) -> Path:
     """Optimize a job's table unless it is there, under a temporary name renamed into place
     (a task retried after its worker died never finds half a table)."""
     path = Path(path)
     if path.is_file():
-        return ensure_table(spectrum, path, lo, hi)
+        return ensure_table(spectrum, path, lo, hi, reflectances=reflectances)
     tmp = rendering.temporary(path)
     try:
-        ensure_table(spectrum, tmp, lo, hi)
+        ensure_table(spectrum, tmp, lo, hi, reflectances=reflectances)
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
@@ -181,7 +181,7 @@ def run(client, plans: Sequence[Plan], optimize: dict[Path, Spectrum], nthreads:
     """Run every plan's renders on ``client``'s cluster.
 
     ``optimize``: the tables to optimize first (a task each; the renders with a table wait for
-    its task), by path, with their spectra. Returns, per plan, the
+    its task), by path, with their spectra (or (spectrum, reflectance set) pairs). Returns, per plan, the
     truth's :class:`~.render.Render` and the images by (method, spp, seed). Before submitting,
     prints the estimated CPU time of the renders still to do (from :func:`probe`); a progress
     bar follows every render."""
@@ -203,7 +203,10 @@ def run(client, plans: Sequence[Plan], optimize: dict[Path, Spectrum], nthreads:
             f"estimated CPU time {_hours(cpu)}{wall} on {sum(slots.values())} worker slots"
             + (f"; {missing} table(s) to optimize first, not in the estimate" if missing else ""))
     lo_hi = {p.table: (p.config.lo, p.config.hi) for p in plans}
-    made = {Path(t): client.submit(table_task, sp, Path(t), *lo_hi[Path(t)], pure=False) for t, sp in optimize.items()}
+    # A table's entry is its spectrum, or (spectrum, reflectance set) for surface colours.
+    made = {Path(t): client.submit(table_task, *(sp if isinstance(sp, tuple) else (sp,))[:1], Path(t),
+                                   *lo_hi[Path(t)], *(sp[1:] if isinstance(sp, tuple) else ()), pure=False)
+            for t, sp in optimize.items()}
     watched, names, truths, images = [], {}, [], []
     for p in plans:
         def submit(job: RenderJob, what: str):

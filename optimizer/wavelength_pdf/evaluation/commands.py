@@ -16,7 +16,7 @@ from typing import Sequence
 
 from wavelength_pdf import data, progress
 from wavelength_pdf.evaluation.protocol import (DEFAULT_METHODS, DEFAULT_SPP, Config, check_config, evaluate,
-                                                finish, plan, write_rows)
+                                                finish, plan, write_rows, WHOLE_SCENE)
 from wavelength_pdf.evaluation.render import PBRT_ENV, REPO, find_pbrt
 from wavelength_pdf.produce import safe_name
 from wavelength_pdf.spectra import load_spectrum
@@ -80,6 +80,9 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
     p.add_argument("--pbrt", type=Path, default=None,
                    help=f"renderer binary (default: ${PBRT_ENV}, else the checkout's build/pbrt, "
                         "else pbrt on PATH)")
+    p.add_argument("--reflectances", default=None, metavar="SET",
+                   help="optimize the tables for coloured surfaces (design §4.5): 'scene' (the "
+                        "scene's materials), 'colorchecker' or a reflectance CSV (design §3.4)")
 
 
 def _renderer(p: argparse.ArgumentParser) -> None:
@@ -107,7 +110,9 @@ def add_subcommands(sub) -> None:
                                    "compares every image per pixel with a high-spp ground truth in "
                                    "CIEDE2000 and writes results.csv, results.md and plots to OUTDIR.")
     p.add_argument("scene", type=Path, help="a pbrt-v4 scene")
-    p.add_argument("spectrum", help="the lamp spectrum (any input the optimizer reads, e.g. cie:FL11)")
+    p.add_argument("spectrum", help="the lamp spectrum (any input the optimizer reads, e.g. cie:FL11); "
+                                    f"'{WHOLE_SCENE}': the scene keeps its own emitters and the table is "
+                                    "optimized for their total emission (optimize --whole-scene)")
     p.add_argument("-o", "--outdir", type=Path, required=True, help="output folder (renders are cached there)")
     p.add_argument("--table", type=Path, default=None, help="use this table instead of optimizing one")
     _common(p)
@@ -189,7 +194,8 @@ def _config(args) -> Config:
     config = Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp,
                     truth_method=args.truth_method, truth_chunks=args.truth_chunks, resolution=resolution,
                     seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
-                    lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt))
+                    lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt),
+                    reflectances=args.reflectances)
     check_config(config)
     if getattr(args, "workers", None) is not None and args.workers < 1:
         raise ValueError(f"--workers must be at least 1, got {args.workers}")
@@ -218,7 +224,10 @@ def job_outputs(ev, spectrum, outdir: Path) -> None:
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
             bar=None, renderer: str = "pbrt"):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
-    spectrum = load_spectrum(spectrum_spec, lo=config.lo, hi=config.hi)
+    spectrum, reflectances = job_inputs(scene, spectrum_spec, config)
+    whole = spectrum_spec == WHOLE_SCENE
+    if renderer == "mitsuba" and (whole or reflectances is not None):
+        raise ValueError(f"'{WHOLE_SCENE}' and --reflectances need the pbrt renderer")
 
     def say(msg: str) -> None:
         if bar is not None:
@@ -247,7 +256,7 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
                                      optimizer_progress=optimizing)
     else:
         ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say,
-                      optimizer_progress=optimizing)
+                      optimizer_progress=optimizing, keep_emitters=whole, reflectances=reflectances)
     say("plots")
     job_outputs(ev, spectrum, outdir)
     return ev
@@ -280,7 +289,8 @@ def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: 
         if not Path(scene).is_file():
             raise FileNotFoundError(2, "no such scene file", str(scene))
     # Everything that can be wrong with the inputs is found here, before any render.
-    spectra = [load_spectrum(spec, lo=config.lo, hi=config.hi) for _, spec in jobs]
+    inputs = [job_inputs(Path(scene), spec, config) for scene, spec in jobs]
+    spectra = [sp for sp, _ in inputs]
     # One table per spectrum: the first job's folder holds it, later jobs lit by the same
     # spectrum render with that one.
     needs_table = "table" in config.methods or config.truth_method == "table"
@@ -292,12 +302,16 @@ def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: 
             read_table(tables[i])
             chosen.append(Path(tables[i]))
             continue
-        if spec not in first:
-            first[spec] = _job_dir(outdir, Path(scene), spec) / "table.csv"
+        # The whole-scene spectrum is each scene's own.
+        per_scene = spec == WHOLE_SCENE or config.reflectances == "scene"
+        key = f"{Path(scene).resolve()}#{spec}" if per_scene else spec
+        if key not in first:
+            first[key] = _job_dir(outdir, Path(scene), spec) / "table.csv"
             if needs_table:
-                optimize[first[spec]] = sp
-        chosen.append(first[spec])
-    plans = [plan(Path(scene), sp, _job_dir(outdir, Path(scene), spec), config, table=t)
+                optimize[first[key]] = (sp, inputs[i][1])
+        chosen.append(first[key])
+    plans = [plan(Path(scene), sp, _job_dir(outdir, Path(scene), spec), config, table=t,
+                  keep_emitters=spec == WHOLE_SCENE)
              for (scene, spec), sp, t in zip(jobs, spectra, chosen)]
     with cluster.connect(workers, scheduler) as client:
         results = cluster.run(client, plans, optimize, config.nthreads, "grid")
@@ -313,6 +327,24 @@ def run_grid(jobs: list[tuple[Path, str]], outdir: Path, config: Config, title: 
     report.plot_summary(rows, outdir / "summary.png", title)
     report.write_report(outdir / "report.md", title, done, config, published=marks)
     return rows
+
+
+def job_inputs(scene: Path, spectrum_spec: str, config: Config):
+    """The spectrum (``whole-scene``: the scene's total emission, from the renderer) and the
+    reflectance set (or None) of one evaluation job; bad input is found here."""
+    if spectrum_spec == WHOLE_SCENE:
+        from wavelength_pdf.scene_spectra import whole_scene_spectrum
+
+        spectrum = whole_scene_spectrum(scene, lo=config.lo, hi=config.hi, pbrt=config.pbrt)
+    else:
+        spectrum = load_spectrum(spectrum_spec, lo=config.lo, hi=config.hi)
+    reflectances = None
+    if config.reflectances is not None:
+        from wavelength_pdf.reflectances import load_reflectances
+
+        reflectances = load_reflectances(config.reflectances, scene=scene, lo=config.lo, hi=config.hi,
+                                         pbrt=config.pbrt)
+    return spectrum, reflectances
 
 
 def _pair(text: str) -> tuple[Path, str]:

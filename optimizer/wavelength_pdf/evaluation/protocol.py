@@ -58,6 +58,15 @@ class Config:
     hi: float = 780.0
     #: The renderer; None: :func:`render.find_pbrt`'s lookup.
     pbrt: Path | None = None
+    #: ``--reflectances``: the surface colours the table is optimized for (design §4.5),
+    #: loaded once per job (:func:`wavelength_pdf.reflectances.load_reflectances`); None:
+    #: the white surface of design §4.1.
+    reflectances: str | None = None
+
+
+#: The spectrum name that evaluates a scene under its own emitters (design §6.1): the table
+#: is optimized for the scene's total emission (``optimize --whole-scene``).
+WHOLE_SCENE = "whole-scene"
 
 
 @dataclass
@@ -90,14 +99,17 @@ class Evaluation:
 
 
 def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: float | str = "auto",
-                 progress: Callable[[int, float], None] | None = None) -> Path:
-    """The spectrum's optimized table at ``path``, optimized only when it is not there yet."""
+                 progress: Callable[[int, float], None] | None = None, reflectances=None) -> Path:
+    """The spectrum's optimized table at ``path``, optimized only when it is not there yet
+    (with ``reflectances``, a :class:`~wavelength_pdf.reflectances.ReflectanceSet`, for those
+    surface colours)."""
     if path.is_file():
         read_table(path)  # a damaged cache is an error, not silently reused
         return path
     from wavelength_pdf.produce import make_grid, optimize_one
 
-    outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, progress)
+    outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, progress,
+                           reflectances=reflectances)
     if not outcome.written:
         raise RuntimeError(f"{spectrum.source}: the optimized table was not accepted "
                            f"({outcome.result.reason})")
@@ -168,15 +180,18 @@ def check_config(config: Config) -> None:
 
 
 def plan(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Config(), *,
-         table: Path | None = None, scene_name: str | None = None) -> Plan:
+         table: Path | None = None, scene_name: str | None = None,
+         keep_emitters: bool = False) -> Plan:
     """Write the lit scene copy and list the renders of the protocol (none is run).
 
-    Without ``table`` the renders use ``outdir/table.csv``, which :func:`ensure_table` makes."""
+    Without ``table`` the renders use ``outdir/table.csv``, which :func:`ensure_table` makes.
+    ``keep_emitters``: the copy keeps the scene's own emitters (the whole-scene mode, where
+    ``spectrum`` is the scene's total emission) instead of being lit by ``spectrum``."""
     check_config(config)
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    edited = edit_scene(scene, spectrum, outdir / "scene.pbrt", lo=config.lo, hi=config.hi,
-                        resolution=config.resolution)
+    edited = edit_scene(scene, None if keep_emitters else spectrum, outdir / "scene.pbrt",
+                        lo=config.lo, hi=config.hi, resolution=config.resolution)
     table = Path(table) if table else outdir / "table.csv"
     samplers = rendering.samplers(table, config.lo, config.hi)
     unknown = (set(config.methods) | {config.truth_method}) - set(samplers)
@@ -277,16 +292,19 @@ def score(ev: Evaluation, name: str, illuminant: str, outdir: Path, config: Conf
 def evaluate(scene: Path, spectrum: Spectrum, outdir: Path, config: Config = Config(), *,
              table: Path | None = None, scene_name: str | None = None,
              progress: Callable[[str], None] | None = None,
-             optimizer_progress: Callable[[int, float], None] | None = None) -> Evaluation:
+             optimizer_progress: Callable[[int, float], None] | None = None,
+             keep_emitters: bool = False, reflectances=None) -> Evaluation:
     """Run the protocol in this process; returns the rows (also written to ``outdir/results.csv``).
 
     ``progress`` hears what is being rendered; ``optimizer_progress(step, J)`` follows the
     table's optimization when there is one to do."""
     say = progress or (lambda msg: None)
-    p = plan(scene, spectrum, outdir, config, table=table, scene_name=scene_name)
+    p = plan(scene, spectrum, outdir, config, table=table, scene_name=scene_name,
+             keep_emitters=keep_emitters)
     if table is None:
         say("optimizing the table")
-        ensure_table(spectrum, p.table, config.lo, config.hi, progress=optimizer_progress)
+        ensure_table(spectrum, p.table, config.lo, config.hi, progress=optimizer_progress,
+                     reflectances=reflectances)
     label = f"ground truth: {config.truth_method}, {config.truth_spp} spp"
     say(label)
     chunks = []

@@ -109,18 +109,20 @@ void Light::Preprocess(const Bounds3f &b) {
     if (sceneRadius == 0) sceneRadius = 1;
 }
 
-Float Light::Power() const {
-    Float base = scale * spectralWeight;
+double Light::PowerFactor() const {
+    const double pi = 3.14159265358979323846, r2 = double(sceneRadius) * double(sceneRadius);
     switch (type) {
-    case LightType::Point: return 4 * Pi * base;
+    case LightType::Point: return 4 * pi;
     case LightType::Spot:
-        return base * 2 * Pi * ((1 - cosFalloffStart) + (cosFalloffStart - cosFalloffEnd) / 2);
-    case LightType::Distant: return base * Pi * Sqr(sceneRadius);
-    case LightType::UniformInfinite: return base * 4 * Pi * Pi * Sqr(sceneRadius);
-    case LightType::DiffuseArea: return base * area * Pi * (twoSided ? 2 : 1);
+        return 2 * pi * ((1 - double(cosFalloffStart)) + (double(cosFalloffStart) - double(cosFalloffEnd)) / 2);
+    case LightType::Distant: return pi * r2;
+    case LightType::UniformInfinite: return 4 * pi * pi * r2;
+    case LightType::DiffuseArea: return pi * double(area) * (twoSided ? 2 : 1);
     }
     return 0;
 }
+
+Float Light::Power() const { return Float(PowerFactor() * double(scale) * double(spectralWeight)); }
 
 std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Point2f u,
                                              const SampledWavelengths &lambda,

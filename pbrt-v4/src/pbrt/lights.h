@@ -75,8 +75,17 @@ class Light {
     // Whether the light sampler should pick this light for next-event estimation. The
     // uniform infinite light is left to BSDF sampling (as pbrt-v4's path integrator does).
     bool SampledByNEE() const { return type != LightType::UniformInfinite; }
-    // A scalar proportional to the emitted power (weights for light selection).
+    // A scalar proportional to the emitted power (weights for light selection):
+    // PowerFactor() * scale * the spectrum's integral against xbar + ybar + zbar.
     Float Power() const;
+    // The emitted spectral power is Phi(lambda) = PowerFactor() * Scale() * spectrum(lambda)
+    // (pbrt-v4's Light::Phi): 4 pi for a point light, 2 pi (1 - (cos start + cos end) / 2)
+    // for a spot light, pi r^2 for a distant light and 4 pi^2 r^2 for a uniform infinite
+    // light (r the radius of the scene's bounding sphere, after Preprocess), and
+    // pi * area (times 2 if two-sided) for a diffuse area light (area in render space).
+    double PowerFactor() const;
+    // "scale" times the 1-nit normalization (and the "power"/"illuminance" rescaling).
+    Float Scale() const { return scale; }
     // The emission spectrum (before "scale") and where the light was defined (the
     // LightSource / AreaLightSource directive; empty if unknown): for the check that the
     // wavelength sampler covers every emitter (wavelength_coverage.h).
@@ -128,6 +137,8 @@ class IndexedPiecewiseLinearSpectrum : public Spectrum {
     SampledSpectrum Sample(const SampledWavelengths &lambda) const override;
     Float MaxValue() const override;
     std::string ToString() const override;
+    // The nodes (between them the spectrum is linear).
+    const std::vector<Float> &Lambdas() const { return lambdas; }
 
   private:
     std::vector<Float> lambdas, values;

@@ -25,6 +25,12 @@ struct RenderOptions {
     Point2i resolution{0, 0};             // --resolution WxH (0: the film's)
     Float resolutionScale = 1;            // --resolution-scale S: multiplies the resolution
     std::optional<int> maxDepth;          // --maxdepth: overrides the integrator's
+    // --emission-spectrum FILE: write the scene's total emitted spectral power (design §5.6)
+    // instead of rendering (the film's output path is then not checked).
+    std::string emissionSpectrum;
+    // --material-reflectances FILE: write the diffuse reflectances of the scene's materials
+    // (design §5.6) instead of rendering.
+    std::string materialReflectances;
 };
 
 }  // namespace pbrt

@@ -163,6 +163,8 @@ class SceneBuilder : public ParserTarget {
         // pbrt-v4's default material: diffuse with reflectance 0.5.
         scene->materials.push_back(
             DiffuseMaterial{MakeConstantSpectrumTexture(std::make_shared<ConstantSpectrum>(0.5f))});
+        scene->materialWhere.push_back("default material");
+        scene->materialUsed.push_back(0);
         graphicsState.material.index = 0;
     }
 
@@ -325,6 +327,8 @@ class SceneBuilder : public ParserTarget {
         RequireWorld("Material", loc);
         ParameterDictionary dict(Concat(std::move(params), graphicsState.materialAttributes));
         scene->materials.push_back(MakeMaterial(name, dict, loc));
+        scene->materialWhere.push_back(loc.ToString());
+        scene->materialUsed.push_back(0);
         graphicsState.material = MaterialRef{int(scene->materials.size()) - 1, "", loc};
     }
     void MakeNamedMaterial(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
@@ -334,6 +338,8 @@ class SceneBuilder : public ParserTarget {
         ParameterDictionary dict(Concat(std::move(params), graphicsState.materialAttributes));
         std::string type = dict.GetOneString("type", "");
         scene->materials.push_back(MakeMaterial(type, dict, loc));
+        scene->materialWhere.push_back(loc.ToString() + " " + name);
+        scene->materialUsed.push_back(0);
         namedMaterials[name] = int(scene->materials.size()) - 1;
     }
     void NamedMaterial(const std::string &name, FileLoc loc) override {
@@ -594,6 +600,7 @@ void SceneBuilder::Shape(const std::string &name, ParsedParameterVector params, 
     CheckUnused(dict, "Shape \"" + name + "\"");
 
     int material = ResolveMaterial(graphicsState.material);
+    scene->materialUsed[size_t(material)] = 1;
     if (std::holds_alternative<InterfaceMaterial>(scene->materials[material])) {
         material = -1;
         scene->hasInterfaces = true;
@@ -660,7 +667,7 @@ void SceneBuilder::EndOfFiles() {
     FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
                                            opts.resolution, opts.resolutionScale, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
-    if (opts.outfile.empty()) {
+    if (opts.outfile.empty() && opts.emissionSpectrum.empty() && opts.materialReflectances.empty()) {
         try {
             CheckOutputImagePath(fs.filename);
         } catch (const PbrtError &e) {

@@ -28,6 +28,10 @@ namespace pbrt {
 struct Scene {
     std::unique_ptr<Accelerator> accel;
     std::vector<Material> materials;
+    // Per material: where it was defined ("FILE:LINE:COL", or the default material) and
+    // whether any shape uses it (for --material-reflectances, design §5.6).
+    std::vector<std::string> materialWhere;
+    std::vector<char> materialUsed;
     std::vector<Light> lights;
     std::vector<int> infiniteLights;   // indices of lights seen by escaping rays
     LightSampler lightSampler;

@@ -1,4 +1,5 @@
 // pbrt: renders pbrt-v4 scene files with the spectral path tracer.
+#include <pbrt/emission.h>
 #include <pbrt/options.h>
 #include <pbrt/render.h>
 #include <pbrt/scene.h>
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +40,15 @@ Wavelengths (four per path from one random number):
   --wavelength-pdf-defensive S mix a uniform share S in [0, 1] into each density of the
                                table, over the table's range (e.g. 0.01): removes zero
                                sampling density where a light emits, which biases the image
+Scene:
+  --emission-spectrum FILE     render nothing: write the scene's total emitted spectral
+                               power (pbrt-v4's light power summed over its lights) to FILE
+                               as `lambda value` lines (a .spd file, design §5.6); a scene
+                               with no emitters is an error (exit 1, no file)
+  --material-reflectances FILE render nothing: write the diffuse reflectances of the
+                               materials the scene's shapes use (RGB through the
+                               renderer's own tables, textures by their mean) to FILE as
+                               a CSV, one column per material (design §3.4, §5.6)
 Other:
   --quiet                      no progress bar or summary
   --version                    the version of pbrt (the project's) and exit
@@ -137,6 +148,12 @@ int main(int argc, char **argv) {
             opts.lambdaMax = Float(ParseFloat(flag, argv[++i]));
             if (!(opts.lambdaMin >= 360 && opts.lambdaMax <= 830 && opts.lambdaMin < opts.lambdaMax))
                 Usage("--wavelength-range: need 360 <= LO < HI <= 830");
+        } else if (flag == "--emission-spectrum") {
+            opts.emissionSpectrum = value();
+            if (opts.emissionSpectrum.empty()) Usage("--emission-spectrum needs a file name");
+        } else if (flag == "--material-reflectances") {
+            opts.materialReflectances = value();
+            if (opts.materialReflectances.empty()) Usage("--material-reflectances needs a file name");
         } else if (flag == "--wavelength-pdf") {
             opts.wavelengthTable = value();
             if (opts.wavelengthTable.empty()) Usage("--wavelength-pdf needs a file name");
@@ -162,6 +179,25 @@ int main(int argc, char **argv) {
             WavelengthSampler::FromTable(opts.wavelengthTable, opts.defensiveShare);
         // Fail before parsing and rendering, not after, when the image cannot be written
         // there (the scene builder checks the film's "filename" the same way).
+        if (!opts.emissionSpectrum.empty() || !opts.materialReflectances.empty()) {
+            // Scene queries (design §5.6): everything is computed before anything is written.
+            for (const std::string &p : {opts.emissionSpectrum, opts.materialReflectances})
+                if (!p.empty()) CheckOutputFilePath(p);
+            std::unique_ptr<Scene> scene = LoadScene(files, opts);
+            std::optional<EmissionSpectrum> e;
+            std::optional<MaterialReflectances> m;
+            if (!opts.emissionSpectrum.empty()) e = SceneEmissionSpectrum(*scene);
+            if (!opts.materialReflectances.empty()) m = SceneMaterialReflectances(*scene);
+            if (e) WriteEmissionSpectrum(opts.emissionSpectrum, *e);
+            if (m) WriteMaterialReflectances(opts.materialReflectances, *m);
+            if (!opts.quiet && e)
+                std::fprintf(stderr, "pbrt: wrote %s: the emitted spectral power at %zu wavelengths\n",
+                             opts.emissionSpectrum.c_str(), e->lambdas.size());
+            if (!opts.quiet && m)
+                std::fprintf(stderr, "pbrt: wrote %s: the reflectances of %zu materials\n",
+                             opts.materialReflectances.c_str(), m->labels.size());
+            return 0;
+        }
         if (!opts.outfile.empty()) CheckOutputImagePath(opts.outfile);
         std::unique_ptr<Scene> scene = LoadScene(files, opts);
         std::string outfile = opts.outfile.empty() ? scene->film->Settings().filename : opts.outfile;
