@@ -185,25 +185,10 @@ def scene_reflectances(scene: str | os.PathLike, lo: float = 380.0, hi: float = 
     reflectance, RGB albedos turned into spectra by the renderer's own tables, textures by
     their mean.
     """
-    import subprocess
-    import tempfile
+    from wavelength_pdf.scene_spectra import renderer_output
 
-    from wavelength_pdf.evaluation.render import find_pbrt
-
-    scene = Path(scene)
-    if not scene.is_file():
-        raise SpectrumError(f"{scene}: no such scene file" if not scene.exists()
-                            else f"{scene}: not a file")
-    binary = find_pbrt(pbrt)
-    with tempfile.TemporaryDirectory(prefix="wavelength-pdf-materials-") as tmp:
-        out = Path(tmp) / "materials.csv"
-        proc = subprocess.run([str(binary), "--quiet", "--material-reflectances", str(out),
-                               str(scene)], capture_output=True, text=True)
-        if proc.returncode != 0 or not out.is_file():
-            msg = " ".join(line.removeprefix("pbrt: ") for line in proc.stderr.splitlines()
-                           if line.strip() and "warning:" not in line)
-            raise SpectrumError(f"{scene}: the renderer ({binary}) cannot give the scene's "
-                                f"material reflectances: {msg or f'exit status {proc.returncode}'}")
+    with renderer_output(Path(scene), "--material-reflectances", "materials.csv",
+                         "material reflectances", pbrt) as out:
         got = read_reflectances(out, lo, hi)
     return ReflectanceSet(name="scene", source=f"{scene} (materials: pbrt --material-reflectances)",
                           wavelengths=got.wavelengths, values=got.values, labels=got.labels,

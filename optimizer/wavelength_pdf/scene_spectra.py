@@ -33,8 +33,10 @@ from __future__ import annotations
 
 import os
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -375,6 +377,33 @@ def select_emitter(spectra: list[Spectrum], selector: str, scene: str | Path) ->
     raise SpectrumError(f"{scene}: no emitter {selector!r}; the scene has {listing}")
 
 
+@contextmanager
+def renderer_output(scene: Path, flag: str, filename: str, what: str,
+                    pbrt: str | os.PathLike | None = None) -> Iterator[Path]:
+    """Run ``pbrt --quiet FLAG OUT SCENE`` (the renderer found as the evaluation finds it,
+    design §7) and yield OUT, a file in a temporary folder removed afterwards; the
+    renderer's refusal becomes a :class:`SpectrumError` with its message (file and line)."""
+    import subprocess
+    import tempfile
+
+    from wavelength_pdf.evaluation.render import find_pbrt
+
+    if not scene.is_file():
+        raise SpectrumError(f"{scene}: no such scene file" if not scene.exists()
+                            else f"{scene}: not a file")
+    binary = find_pbrt(pbrt)
+    with tempfile.TemporaryDirectory(prefix="wavelength-pdf-") as tmp:
+        out = Path(tmp) / filename
+        proc = subprocess.run([str(binary), "--quiet", flag, str(out), str(scene)],
+                              capture_output=True, text=True)
+        if proc.returncode != 0 or not out.is_file():
+            msg = " ".join(line.removeprefix("pbrt: ") for line in proc.stderr.splitlines()
+                           if line.strip() and "warning:" not in line)
+            raise SpectrumError(f"{scene}: the renderer ({binary}) cannot give the scene's "
+                                f"{what}: {msg or f'exit status {proc.returncode}'}")
+        yield out
+
+
 def whole_scene_spectrum(path: str | Path, lo: float = 380.0, hi: float = 780.0,
                          pbrt: str | os.PathLike | None = None) -> Spectrum:
     """The scene's total emitted spectral power, the renderer's own account of it.
@@ -396,25 +425,9 @@ def whole_scene_spectrum(path: str | Path, lo: float = 380.0, hi: float = 780.0,
     wavelength_pdf.evaluation.render.RendererNotFound
         No renderer.
     """
-    import subprocess
-    import tempfile
-
-    from wavelength_pdf.evaluation.render import find_pbrt
-
     scene = Path(path)
-    if not scene.is_file():
-        raise SpectrumError(f"{scene}: no such scene file" if not scene.exists()
-                            else f"{scene}: not a file")
-    binary = find_pbrt(pbrt)
-    with tempfile.TemporaryDirectory(prefix="wavelength-pdf-emission-") as tmp:
-        out = Path(tmp) / f"{_label(scene)}-whole-scene.spd"
-        proc = subprocess.run([str(binary), "--quiet", "--emission-spectrum", str(out), str(scene)],
-                              capture_output=True, text=True)
-        if proc.returncode != 0 or not out.is_file():
-            msg = " ".join(line.removeprefix("pbrt: ") for line in proc.stderr.splitlines()
-                           if line.strip() and "warning:" not in line)
-            raise SpectrumError(f"{scene}: the renderer ({binary}) cannot give the scene's "
-                                f"emission: {msg or f'exit status {proc.returncode}'}")
+    with renderer_output(scene, "--emission-spectrum", f"{_label(scene)}-whole-scene.spd",
+                         "emission", pbrt) as out:
         sp = read_spd(out, lo=None, hi=None)
     sp = Spectrum(name=f"{_label(scene)}-whole-scene", source=f"{scene} (all emitters, "
                   f"weighted by power: pbrt --emission-spectrum)", wavelengths=sp.wavelengths,

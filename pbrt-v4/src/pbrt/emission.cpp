@@ -79,15 +79,14 @@ void CheckOutputFilePath(const std::string &path) {
     if (access(dir.c_str(), W_OK) != 0) throw fail("the output directory is not writable");
 }
 
-void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {
+// Writes `path` through `body` (which returns false when a write failed) under a temporary
+// name, renamed into place only when every write succeeded: never a partial file.
+template <typename Body>
+static void WriteAtomically(const std::string &path, Body body) {
     std::string tmp = path + ".tmp" + std::to_string(getpid());
     FILE *f = std::fopen(tmp.c_str(), "w");
     if (!f) throw PbrtError("\"" + path + "\": cannot be written");
-    bool ok = std::fprintf(f,
-                           "# The scene's total emitted spectral power (design section 5.6): "
-                           "lambda (nm), power per nm\n") > 0;
-    for (size_t i = 0; i < s.lambdas.size() && ok; ++i)
-        ok = std::fprintf(f, "%.17g %.17g\n", s.lambdas[i], s.values[i]) > 0;
+    bool ok = body(f);
     ok = (std::fclose(f) == 0) && ok;
     std::error_code ec;
     if (ok) std::filesystem::rename(tmp, path, ec);
@@ -95,6 +94,17 @@ void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {
         std::filesystem::remove(tmp, ec);
         throw PbrtError("\"" + path + "\": writing failed");
     }
+}
+
+void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {
+    WriteAtomically(path, [&](FILE *f) {
+        bool ok = std::fprintf(f,
+                               "# The scene's total emitted spectral power (design section 5.6): "
+                               "lambda (nm), power per nm\n") > 0;
+        for (size_t i = 0; i < s.lambdas.size() && ok; ++i)
+            ok = std::fprintf(f, "%.17g %.17g\n", s.lambdas[i], s.values[i]) > 0;
+        return ok;
+    });
 }
 
 }  // namespace pbrt
@@ -164,26 +174,19 @@ MaterialReflectances SceneMaterialReflectances(const Scene &scene) {
 }
 
 void WriteMaterialReflectances(const std::string &path, const MaterialReflectances &m) {
-    std::string tmp = path + ".tmp" + std::to_string(getpid());
-    FILE *f = std::fopen(tmp.c_str(), "w");
-    if (!f) throw PbrtError("\"" + path + "\": cannot be written");
-    bool ok = std::fprintf(f, "# The diffuse reflectances of the scene's materials (design section 5.6)\n"
-                              "lambda_nm") > 0;
-    for (const std::string &l : m.labels) ok = ok && std::fprintf(f, ",%s", l.c_str()) > 0;
-    ok = ok && std::fputc('\n', f) != EOF;
-    const int n = int(Lambda_max - Lambda_min) + 1;
-    for (int i = 0; i < n && ok; ++i) {
-        ok = std::fprintf(f, "%d", int(Lambda_min) + i) > 0;
-        for (const auto &v : m.values) ok = ok && std::fprintf(f, ",%.17g", v[size_t(i)]) > 0;
+    WriteAtomically(path, [&](FILE *f) {
+        bool ok = std::fprintf(f, "# The diffuse reflectances of the scene's materials (design section 5.6)\n"
+                                  "lambda_nm") > 0;
+        for (const std::string &l : m.labels) ok = ok && std::fprintf(f, ",%s", l.c_str()) > 0;
         ok = ok && std::fputc('\n', f) != EOF;
-    }
-    ok = (std::fclose(f) == 0) && ok;
-    std::error_code ec;
-    if (ok) std::filesystem::rename(tmp, path, ec);
-    if (!ok || ec) {
-        std::filesystem::remove(tmp, ec);
-        throw PbrtError("\"" + path + "\": writing failed");
-    }
+        const int n = int(Lambda_max - Lambda_min) + 1;
+        for (int i = 0; i < n && ok; ++i) {
+            ok = std::fprintf(f, "%d", int(Lambda_min) + i) > 0;
+            for (const auto &v : m.values) ok = ok && std::fprintf(f, ",%.17g", v[size_t(i)]) > 0;
+            ok = ok && std::fputc('\n', f) != EOF;
+        }
+        return ok;
+    });
 }
 
 }  // namespace pbrt
