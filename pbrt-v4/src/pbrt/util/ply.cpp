@@ -20,6 +20,15 @@ namespace pbrt {
 
 namespace {
 
+// A value read from the file, for a message: any double (a cast to an integer type would be
+// undefined beyond its range, and the fuzzer found such an index).
+std::string FormatValue(double x) {
+    std::ostringstream s;
+    s.precision(17);
+    s << x;
+    return s.str();
+}
+
 enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64, Invalid };
 
 PlyType ParseType(const std::string &s) {
@@ -94,8 +103,8 @@ class BodyReader {
     // A list's item count; a count larger than the remaining bytes is malformed.
     size_t ReadCount(PlyType t) {
         double n = Read(t);
-        if (n < 0 || n > double(Remaining()) + 1)
-            throw PbrtError("\"" + path + "\": bad list count " + std::to_string((long long)n) +
+        if (!(n >= 0 && n <= double(Remaining()) + 1))  // NaN too
+            throw PbrtError("\"" + path + "\": bad list count " + FormatValue(n) +
                             " in the PLY data");
         return size_t(n);
     }
@@ -329,7 +338,13 @@ PlyMesh ParsePly(const std::string &data, const std::string &path) {
                         }
                     } else {
                         double x = body.Read(p.type);
-                        if (p.role == kFaceIndex) faceIndex = int(x);
+                        if (p.role == kFaceIndex) {
+                            if (!(x >= double(std::numeric_limits<int>::min()) &&
+                                  x <= double(std::numeric_limits<int>::max())))
+                                throw fail("face " + std::to_string(i) + " has face index " +
+                                           FormatValue(x) + ", out of range");
+                            faceIndex = int(x);
+                        }
                     }
                 }
                 // Triangles as they are; quads and larger polygons as fans from vertex 0.
@@ -337,9 +352,9 @@ PlyMesh ParsePly(const std::string &data, const std::string &path) {
                     throw fail("face " + std::to_string(i) + " has " +
                                std::to_string(list.size()) + " vertices (at least 3 needed)");
                 for (double x : list)
-                    if (x < 0 || x > double(std::numeric_limits<int>::max()))
+                    if (!(x >= 0 && x <= double(std::numeric_limits<int>::max())))  // NaN too
                         throw fail("face " + std::to_string(i) + " uses vertex index " +
-                                   std::to_string((long long)x) + ", out of range");
+                                   FormatValue(x) + ", out of range");
                 for (size_t k = 1; k + 1 < list.size(); ++k) {
                     mesh.indices.push_back(int(list[0]));
                     mesh.indices.push_back(int(list[k]));
