@@ -61,9 +61,7 @@ void CheckInstanceRange(const std::string &name, const Transform &renderFromInst
                                     "transformations only (last row 0 0 0 1)");
     if (objectBounds.IsEmpty()) return;
     for (int c = 0; c < 8; ++c) {
-        const Point3f corner((c & 1) ? objectBounds.pMax.x : objectBounds.pMin.x,
-                             (c & 2) ? objectBounds.pMax.y : objectBounds.pMin.y,
-                             (c & 4) ? objectBounds.pMax.z : objectBounds.pMin.z);
+        const Point3f corner = objectBounds.Corner(c);
         const Point3f w = renderFromInstance.ApplyPoint(corner);
         if (!WithinRenderRange(w))
             throw PbrtError(loc, what + "the object reaches " + PointText(w) + " after the "
@@ -96,9 +94,7 @@ void CheckInstanceRays(const std::string &name, const Transform &renderFromInsta
                              "+-1e12 the ray tracer can intersect");
     }
     for (int c = 0; c < 8; ++c) {
-        const Point3f corner((c & 1) ? sceneExtent.pMax.x : sceneExtent.pMin.x,
-                             (c & 2) ? sceneExtent.pMax.y : sceneExtent.pMin.y,
-                             (c & 4) ? sceneExtent.pMax.z : sceneExtent.pMin.z);
+        const Point3f corner = sceneExtent.Corner(c);
         const Point3f w = instanceFromRender.ApplyPoint(corner);
         if (!WithinRenderRange(w))
             throw PbrtError(loc, "ObjectInstance \"" + name + "\": its transformation shrinks the "

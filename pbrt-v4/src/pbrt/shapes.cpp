@@ -359,9 +359,7 @@ ShapeSet CreateShapes(const std::string &name, const ParameterDictionary &params
         // The corners of its bounds in render space must be within the ray tracer's range.
         Bounds3f ob = s.ObjectBounds();
         for (int c = 0; c < 8; ++c) {
-            Point3f corner((c & 1) ? ob.pMax.x : ob.pMin.x, (c & 2) ? ob.pMax.y : ob.pMin.y,
-                           (c & 4) ? ob.pMax.z : ob.pMin.z);
-            Point3f w = renderFromObject.ApplyPoint(corner);
+            Point3f w = renderFromObject.ApplyPoint(ob.Corner(c));
             if (!WithinRenderRange(w))
                 throw PbrtError(loc, "sphere of radius " + std::to_string(radius) +
                                          " reaches " + PointString(w) +

@@ -164,6 +164,11 @@ struct Bounds3f {
     bool IsEmpty() const { return pMin.x > pMax.x || pMin.y > pMax.y || pMin.z > pMax.z; }
     Vector3f Diagonal() const { return pMax - pMin; }
     Point3f Center() const { return (pMin + pMax) * Float(0.5); }
+    // Corner c = 0..7: bit 0 picks x from pMax, bit 1 y, bit 2 z (as pbrt-v4 numbers them).
+    Point3f Corner(int c) const {
+        return Point3f((c & 1) ? pMax.x : pMin.x, (c & 2) ? pMax.y : pMin.y,
+                       (c & 4) ? pMax.z : pMin.z);
+    }
     // The bounding sphere (centre and radius); radius 0 for an empty box.
     void BoundingSphere(Point3f *center, Float *radius) const {
         *center = IsEmpty() ? Point3f() : Center();
