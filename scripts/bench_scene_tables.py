@@ -1,7 +1,7 @@
 """Several tables on one scene against one ground truth: mean CIEDE2000 and time per spp.
 
 For the whole-scene and reflectance-aware modes (design §3.1, §4.5, §6.1a): the scene is
-either lit by one spectrum (``--spectrum SPEC``, as ``evaluate`` lights it) or keeps its own
+either lit by one spectrum (``--spectrum SPECTRUM``, as ``evaluate`` lights it) or keeps its own
 emitters (``--spectrum whole-scene``); every table given as ``NAME=TABLE.csv`` is rendered
 with the same seeds beside stratified uniform sampling, and every image is scored per pixel
 against one truth rendered with stratified uniform sampling (the unbiased baseline, so no

@@ -197,7 +197,7 @@ def scene_reflectances(scene: str | os.PathLike, lo: float = 380.0, hi: float = 
 
 def load_reflectances(spec: str, scene: str | os.PathLike | None = None, lo: float = 380.0,
                       hi: float = 780.0, pbrt: str | os.PathLike | None = None) -> ReflectanceSet:
-    """``--reflectances SPEC``: ``scene`` (needs ``scene``), ``colorchecker`` or a file."""
+    """``--reflectances SET``: ``scene`` (needs ``scene``), ``colorchecker`` or a file."""
     if spec == "white":
         raise SpectrumError("'white' is the surface of design §4.1, not a set of reflectances "
                             "(optimize without reflectances)")
