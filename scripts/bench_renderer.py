@@ -110,13 +110,7 @@ def render_cpu(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[
                out: pathlib.Path, nthreads: int) -> float:
     cmd = [str(binary), "--quiet", "--spp", str(spp), "--seed", "1", "--nthreads", str(nthreads),
            *extra, "--outfile", str(out), str(scene)]
-    before = os.times()
-    proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    after = os.times()
-    if proc.returncode != 0:
-        lines = [line for line in proc.stderr.splitlines() if line.strip()]
-        raise BenchError(f"{binary.name}: exit {proc.returncode}: {lines[-1] if lines else ''}")
-    return (after.children_user - before.children_user) + (after.children_system - before.children_system)
+    return child_cpu(cmd, binary.name)
 
 
 def process_throughput(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],
