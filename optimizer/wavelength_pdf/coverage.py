@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .colorimetry import cmfs
+from .model import product_integrals
 
 #: Emission outside the table's range above this fraction of the luminance is reported.
 OUTSIDE_LUMINANCE_FRACTION = 1e-4
@@ -122,16 +123,6 @@ def zero_mixture_intervals(grid: np.ndarray, pdfs: np.ndarray) -> list[Interval]
     return out
 
 
-def _segment_integrals(x: np.ndarray, s0: np.ndarray, s1: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Per interval of ``x``: integral of s * c, s linear from s0 to s1 on the interval (its
-    one-sided limits: a spectrum jumps to zero at its ends) and c linear between its node
-    values, shape (n-1, k). Simpson's rule is exact for the product of two linear functions."""
-    h = np.diff(x)[:, None]
-    sm = 0.5 * (s0 + s1)[:, None]
-    cm = 0.5 * (c[1:] + c[:-1])
-    return h * (s0[:, None] * c[:-1] + 4.0 * sm * cm + s1[:, None] * c[1:]) / 6.0
-
-
 def coverage(grid: np.ndarray, pdfs: np.ndarray, spectrum) -> Coverage:
     """Where the table (``grid``, ``pdfs`` (4, M+1)) misses the light of ``spectrum``.
 
@@ -158,7 +149,7 @@ def coverage(grid: np.ndarray, pdfs: np.ndarray, spectrum) -> Coverage:
     c = np.stack([np.interp(x, cwl, cval[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
     # Emission itself (a CMF of 1) as a fourth column: a gap "emits" where the spectrum does,
     # even where the CMFs are tiny.
-    seg = _segment_integrals(x, s0, s1, np.column_stack([c, np.ones(x.size)]))
+    seg = product_integrals(x, s0, s1, np.column_stack([c, np.ones(x.size)]))
     mid = 0.5 * (x[1:] + x[:-1])
     total = seg[:, :3].sum(axis=0)
 

@@ -93,3 +93,14 @@ def trapezoid(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
     grid = np.asarray(grid, dtype=np.float64)
     values = np.asarray(values, dtype=np.float64)
     return np.sum(0.5 * (values[..., 1:] + values[..., :-1]) * np.diff(grid), axis=-1)
+
+
+def product_integrals(x: np.ndarray, s0: np.ndarray, s1: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Per interval of ``x``: the integral of s * c, s linear from ``s0`` to ``s1`` on the
+    interval (one value per end, so a spectrum may jump at a node) and ``c`` (n, k) linear
+    between its node values; shape (n - 1, k). Simpson's rule, exact for the product of two
+    linear functions."""
+    h = np.diff(x)[:, None]
+    sm = 0.5 * (s0 + s1)[:, None]
+    cm = 0.5 * (c[1:] + c[:-1])
+    return h * (s0[:, None] * c[:-1] + 4.0 * sm * cm + s1[:, None] * c[1:]) / 6.0

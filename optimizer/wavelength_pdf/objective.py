@@ -51,7 +51,7 @@ from . import aot, colorimetry, sampling
 
 Array = jax.Array
 
-from .model import DEFAULT_GRID, check_objective_nodes, check_table_nodes  # noqa: E402
+from .model import DEFAULT_GRID, check_objective_nodes, check_table_nodes, product_integrals  # noqa: E402
 
 #: Gauss-Legendre points per piece between u-breakpoints: the resolution the solvers
 #: search with and report (J), and the refined one that shows J has converged (J_fine;
@@ -163,13 +163,7 @@ def _pad_to(n: int) -> int:
 def _exact_integral(nodes: np.ndarray, spec: np.ndarray, cmf: np.ndarray) -> np.ndarray:
     """Integral of spec * cmf over the node range; exact (Simpson) for the product of two
     functions linear on every node interval."""
-    h = np.diff(nodes)
-    s_mid = 0.5 * (spec[1:] + spec[:-1])
-    c_mid = 0.5 * (cmf[1:] + cmf[:-1])
-    f0 = spec[:-1, None] * cmf[:-1]
-    f1 = spec[1:, None] * cmf[1:]
-    fm = s_mid[:, None] * c_mid
-    return np.sum(h[:, None] * (f0 + 4.0 * fm + f1) / 6.0, axis=0)
+    return np.sum(product_integrals(nodes, spec[:-1], spec[1:], cmf), axis=0)
 
 
 def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID, reflectances=None) -> Problem:
