@@ -250,9 +250,10 @@ def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spe
     scale = 1.0 / (peak * c[1])
     c = _exact_integral(nodes, spec, cmf)
     c = c / c[1]  # Y exactly 1
-    lab_c = np.asarray(_xyz_to_lab_jit(c))
-    spec_arr = spec
-    if refl is not None:
+    if refl is None:
+        spec_arr = spec
+        lab_c = np.asarray(_xyz_to_lab_jit(c))
+    else:
         # Each colour relative to the white surface under the same lamp (Y = 1), in Lab
         # relative to D65 at Y = 1 (design §4.5).
         spec_arr = spec[None, :] * refl
