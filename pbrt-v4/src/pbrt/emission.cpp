@@ -67,18 +67,6 @@ EmissionSpectrum SceneEmissionSpectrum(const Scene &scene) {
     return out;
 }
 
-void CheckOutputFilePath(const std::string &path) {
-    namespace fs = std::filesystem;
-    auto fail = [&](const std::string &why) { return PbrtError("\"" + path + "\": " + why); };
-    if (path.empty()) throw fail("empty output file name");
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw fail("is a directory; the output needs a file name");
-    fs::path dir = fs::path(path).parent_path();
-    if (dir.empty()) dir = ".";
-    if (!fs::is_directory(dir, ec)) throw fail("the output directory does not exist");
-    if (access(dir.c_str(), W_OK) != 0) throw fail("the output directory is not writable");
-}
-
 // Writes `path` through `body` (which returns false when a write failed) under a temporary
 // name, renamed into place only when every write succeeded: never a partial file.
 template <typename Body>

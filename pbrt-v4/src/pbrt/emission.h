@@ -27,10 +27,6 @@ EmissionSpectrum SceneEmissionSpectrum(const Scene &scene);
 // temporary file renamed into place (never a partial file). Throws PbrtError on failure.
 void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s);
 
-// Throws PbrtError ("\"PATH\": reason") unless a file can be written at path (not a
-// directory; its directory exists), checked before the scene is parsed.
-void CheckOutputFilePath(const std::string &path);
-
 // The diffuse reflectances of the materials that the scene's shapes use (design §5.6): the
 // "reflectance" of "diffuse", "coateddiffuse" and "conductor" (when given as a reflectance)
 // materials, as the renderer builds them (RGB through its sigmoid-polynomial tables), a

@@ -11,4 +11,8 @@ namespace pbrt {
 // its directory exists and is writable.
 void CheckOutputImagePath(const std::string &path);
 
+// The same for any other output file (pbrt --emission-spectrum, --material-reflectances):
+// not a directory, in a directory that exists and is writable.
+void CheckOutputFilePath(const std::string &path);
+
 }  // namespace pbrt
