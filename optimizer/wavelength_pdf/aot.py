@@ -37,6 +37,7 @@ import sys
 import tempfile
 import time
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import Any, Callable
 
@@ -154,9 +155,9 @@ class DiskJit:
         self._static = tuple(static_argnames)
         self._signature = inspect.signature(fn) if self._static else None
 
-    def __call__(self, *args, **static):
-        if _dir is None:
-            return self._plain(args, static)
+    def _split(self, args, static):
+        """(non-static arguments, static ones as keywords, signature); the signature is
+        None where it cannot be taken (arguments being traced by an outer jit)."""
         if self._static:
             # Static arguments given by position become keywords (they are part of the
             # signature, not arguments of the executable).
@@ -167,6 +168,14 @@ class DiskJit:
             leaves, tree = jax.tree_util.tree_flatten(args)
             sig = (str(tree), tuple(_leaf_signature(x) for x in leaves), tuple(sorted(static.items())))
         except TypeError:
+            sig = None
+        return args, static, sig
+
+    def __call__(self, *args, **static):
+        if _dir is None:
+            return self._plain(args, static)
+        args, static, sig = self._split(args, static)
+        if sig is None:
             return self.jitted(*args, **static)
         fn = self._compiled.get(sig)
         if fn is None:
@@ -174,14 +183,22 @@ class DiskJit:
             self._compiled[sig] = fn
         return fn(*args)
 
+    def bind(self, *args, **static) -> Callable:
+        """The executable for the signature of ``args`` (and these static arguments), to be
+        called with the non-static arguments alone, positionally, on arguments of that same
+        signature: a hot loop's calls then skip the signature check of every call (a pytree
+        flatten and a string, a tenth of a millisecond on the solvers' objective). Loads or
+        compiles it now, under the deadline like any first call."""
+        self(*args, **static)
+        args, static, sig = self._split(args, static)
+        if _dir is None or sig is None:
+            return partial(self.jitted, **static)
+        return self._compiled[sig]
+
     def _plain(self, args, static):
         """The jitted function; its first call per signature compiles, under the deadline."""
-        try:
-            leaves, tree = jax.tree_util.tree_flatten(args)
-            sig = (str(tree), tuple(_leaf_signature(x) for x in leaves), tuple(sorted(static.items())))
-        except TypeError:
-            return self.jitted(*args, **static)
-        if sig in self._seen:
+        args, static, sig = self._split(args, static)
+        if sig is None or sig in self._seen:
             return self.jitted(*args, **static)
         _may_compile(self.name)
         with _timed_compilation():

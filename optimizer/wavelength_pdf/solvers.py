@@ -21,11 +21,11 @@ Every solver minimizes the same function of a parameter vector x:
 - The search runs on ``objective.simplify(problem, SEARCH_TOL)``; tables are judged on
   the exact problem.
 
-J and its gradient with respect to the table come from one jitted value-and-grad
-(``objective.penalized_value_and_grad``, compiled once per problem size class); the
-parameterizations and the coarse levels (``Level``: every k-th table node, interpolated
-exactly to the table grid) are small jitted maps whose vector-Jacobian product is applied
-on top. SciPy and Ipopt see float64 NumPy arrays.
+The value and its gradient with respect to the parameters come from one executable per
+parameterization and problem size class (``_penalized_in``: the parameterization, the
+coarse level's interpolation to the table grid (``Level``: every k-th table node), the
+objective and the gradient pulled back, in one call and one transfer per evaluation).
+SciPy and Ipopt see float64 NumPy arrays.
 
 Solvers are deterministic for the same input and seed, as long as ``max_seconds`` does not
 cut a run short (the evaluation budget is what normally stops them). ``max_seconds`` counts
@@ -181,9 +181,17 @@ def _to_V(x, E, s, mask, dg, name):
 
 
 @partial(aot.disk_jit, static_argnames=("name",))
-def _pull_back(x, E, s, mask, dg, gP, name):
-    _, vjp = jax.vjp(lambda y: PARAMETERIZATIONS[name].to_P(y, E, s, mask, dg), x)
-    return vjp(gP)[0]
+def _penalized_in(x, E, s, mask, dg, arr, glx, glw, var_ref, mu, margin, name):
+    """[value, J, gradient...] of the penalized objective (``objective.penalized``) at
+    parameters x of parameterization ``name``: one executable and one transfer per
+    evaluation (the map to the table, the objective and its gradient pulled back to x,
+    which as three calls cost a third more time)."""
+    def value(y):
+        P = PARAMETERIZATIONS[name].to_P(y, E, s, mask, dg)
+        return objective.penalized(P, arr, glx, glw, var_ref, mu, margin)
+
+    (val, (J, _, _)), g = jax.value_and_grad(value, has_aux=True)(x)
+    return jnp.concatenate([jnp.stack([val, J]), g])
 
 
 # --- Levels: coarser grids embedded in the table grid ---------------------------------
@@ -299,29 +307,26 @@ class _Context:
         ub = np.where(np.tile(level.mask, N_DENSITIES), np.inf, 0.0)
         return scipy.optimize.Bounds(np.zeros_like(ub), ub)
 
-    def evaluate(self, P: jax.Array, var_ref: jax.Array | None = None) -> tuple[float, float, jax.Array]:
-        var_ref = self.var_ref if var_ref is None else var_ref
-        (val, (J, _, _)), gP = objective.penalized_value_and_grad(
-            P, self.arr, self.glx, self.glw, var_ref, self.mu, PENALTY_MARGIN)
-        return float(val), float(J), gP
-
     def fun(self, level: Level, name: str, tracker: "_Tracker"):
         """The scalar objective with gradient for SciPy/Ipopt in parameterization ``name``
         on ``level`` (variance penalty against ``var_ref_for(level)``)."""
         var_ref = self.var_ref_for(level)
         E, mask = self._j(level)
+        rest = (E, self.s, mask, self.dg, self.arr, self.glx, self.glw, var_ref, self.mu, PENALTY_MARGIN)
+        exe = []  # the executable, bound at the first evaluation (which may compile)
 
         def f(x: np.ndarray):
             if self.out_of_budget():
                 raise _OutOfBudget
             xj = _put(x)
             try:
-                P = _to_P(xj, E, self.s, mask, self.dg, name)
-                val, J, gP = self.evaluate(P, var_ref)
-                g = np.asarray(_pull_back(xj, E, self.s, mask, self.dg, gP, name), dtype=np.float64)
+                if not exe:
+                    exe.append(_penalized_in.bind(xj, *rest, name=name))
+                out = np.asarray(exe[0](xj, *rest), dtype=np.float64)
             except aot.CompileWouldOverrun:  # the time cap: keep the best point so far
                 self.timed_out = True
                 raise _OutOfBudget from None
+            val, J, g = float(out[0]), float(out[1]), out[2:]
             self.nfev += 1
             if not np.isfinite(val) or not np.all(np.isfinite(g)):
                 # A step into a region the objective cannot evaluate: make it unattractive.

@@ -82,6 +82,22 @@ def test_traced_arguments_and_no_cache_fall_back_to_jit(tmp_path):
 
 
 @pytest.mark.parametrize("on_disk", [True, False])
+@float64
+def test_bound_executable_equals_the_call(on_disk, tmp_path):
+    """``bind`` gives the executable of one signature, called with the non-static arguments
+    alone: the same numbers as calling the function, on other values of that signature."""
+    aot.enable(tmp_path if on_disk else None)
+    f = _fresh()
+    arr = {"w": jnp.linspace(1.0, 2.0, 9)}
+    exe = f.bind(jnp.zeros(9), arr, 0.5, name="sort")
+    for k in range(3):
+        x = jnp.linspace(0.0, 1.0 + k, 9)
+        np.testing.assert_array_equal(np.asarray(exe(x, arr, 0.25 * k)),
+                                      np.asarray(f(x, arr, 0.25 * k, "sort")))
+    assert len(list(tmp_path.glob("f-*.pkl"))) == (1 if on_disk else 0)
+
+
+@pytest.mark.parametrize("on_disk", [True, False])
 def test_no_compilation_starts_that_would_end_past_the_deadline(on_disk, tmp_path, monkeypatch):
     """A time cap is kept across compilations, which cannot be cut short: under a deadline
     a call that must compile first refuses when less time is left than a compilation takes;

@@ -91,7 +91,8 @@ def problems():
 
 
 def test_all_fixtures_share_one_compiled_shape(problems):
-    assert {p.nodes.size for p in problems.values()} == {512}
+    sizes = {p.nodes.size for p in problems.values()}
+    assert len(sizes) == 1 and sizes.pop() % objective._PAD == 0
 
 
 def test_target_is_the_exact_integral_with_Y_one(problems):
