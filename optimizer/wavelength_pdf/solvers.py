@@ -24,7 +24,8 @@ Every solver minimizes the same function of a parameter vector x:
 The value and its gradient with respect to the parameters come from one executable per
 parameterization and problem size class (``_penalized_in``: the parameterization, the
 coarse level's interpolation to the table grid (``Level``: every k-th table node), the
-objective and the gradient pulled back, in one call and one transfer per evaluation).
+objective and the gradient pulled back, in one call and one transfer per evaluation); every
+level's parameters are padded to the table grid's count, so the levels share it.
 SciPy and Ipopt see float64 NumPy arrays.
 
 Solvers are deterministic for the same input and seed, as long as ``max_seconds`` does not
@@ -182,7 +183,7 @@ def _to_V(x, E, s, mask, dg, name):
 
 @partial(aot.disk_jit, static_argnames=("name",))
 def _penalized_in(x, E, s, mask, dg, arr, glx, glw, var_ref, mu, margin, name):
-    """[value, J, gradient...] of the penalized objective (``objective.penalized``) at
+    """[value, J, E[C]..., E[(C - c)^2]..., gradient...] of the penalized objective (``objective.penalized``) at
     parameters x of parameterization ``name``: one executable and one transfer per
     evaluation (the map to the table, the objective and its gradient pulled back to x,
     which as three calls cost a third more time)."""
@@ -190,8 +191,8 @@ def _penalized_in(x, E, s, mask, dg, arr, glx, glw, var_ref, mu, margin, name):
         P = PARAMETERIZATIONS[name].to_P(y, E, s, mask, dg)
         return objective.penalized(P, arr, glx, glw, var_ref, mu, margin)
 
-    (val, (J, _, _)), g = jax.value_and_grad(value, has_aux=True)(x)
-    return jnp.concatenate([jnp.stack([val, J]), g])
+    (val, (J, m1, m2)), g = jax.value_and_grad(value, has_aux=True)(x)
+    return jnp.concatenate([jnp.stack([val, J]), m1.ravel(), m2.ravel(), g])
 
 
 # --- Levels: coarser grids embedded in the table grid ---------------------------------
@@ -248,25 +249,58 @@ class _Context:
         self.support = s > 0
         self.dg = jax.device_put(np.diff(problem.grid))
         self.health_init = health_mod.health(problem, P_init)
+        self.fine = make_level(problem.grid, self.support, 1)
+        self._jlevels: dict[int, tuple] = {}
+        self._padded: dict[int, tuple] = {}
+        self._exes: dict[str, Callable] = {}
+        self._unit = jax.device_put(np.ones_like(self.search.c))
         # The penalty compares variances on the search problem, the acceptance on the
         # exact one (``health_init``).
-        self.var_ref = self._variance(P_init)
+        self.J_init, self.var_ref = self._reference(self.fine, P_init)
         self._var_refs: dict[int, jax.Array] = {1: self.var_ref}
-        self.J_init = objective.J(self.search, P_init, self.order)
         self.mu = float(penalty_weight * max(self.J_init, 1e-3))
         self.progress = progress
         self.max_evals = max_evals
         self.nfev = 0
         self.history: list[float] = []
         self.best_J = np.inf
-        self.fine = make_level(problem.grid, self.support, 1)
-        self._jlevels: dict[int, tuple] = {}
 
-    def _variance(self, P: np.ndarray) -> jax.Array:
-        _, m1, m2 = objective.moments(self.search, P, self.order)
+    def _reference(self, level: Level, V: np.ndarray) -> tuple[float, jax.Array]:
+        """J and the per-channel variance of C(u) (floored above 0) of the table with node
+        values V on ``level``, on the search problem."""
+        x = PARAMETERIZATIONS["values"].from_V(V, level.mask)
+        _, J, m1, m2, _ = self.evaluate(x, level, "values", self._unit, 0.0)
         c = self.search.c
         var = np.maximum(m2 - (m1 - c) ** 2, 0.0)
-        return jax.device_put(np.maximum(var, 1e-24 * c**2 + 1e-300))
+        return J, jax.device_put(np.maximum(var, 1e-24 * c**2 + 1e-300))
+
+    def evaluate(self, x: np.ndarray, level: Level, name: str, var_ref: jax.Array, mu: float):
+        """(penalized value, J, E[C], E[(C - c)^2], gradient) at parameters x of ``name`` on
+        ``level``, on the search problem.
+
+        Every level's parameters are padded with masked-out zeros to the table grid's
+        count, so that all levels share one executable per parameterization: loading one
+        from the disk cache takes 0.1-0.3 s, as long as hundreds of evaluations."""
+        n, full = level.E.shape[1], self.fine.E.shape[1]
+        if level.stride not in self._padded:
+            E = np.zeros((level.E.shape[0], full))
+            E[:, :n] = level.E
+            mask = np.concatenate([level.mask, np.zeros(full - n, dtype=bool)])
+            self._padded[level.stride] = (jax.device_put(E), jax.device_put(mask))
+        E, mask = self._padded[level.stride]
+        xp = np.zeros((N_DENSITIES, full))
+        xp[:, :n] = np.reshape(x, (N_DENSITIES, n))
+        args = (_put(xp.ravel()), E, self.s, mask, self.dg, self.arr, self.glx, self.glw, var_ref, mu,
+                PENALTY_MARGIN)
+        exe = self._exes.get(name)
+        if exe is None:
+            exe = self._exes[name] = _penalized_in.bind(*args, name=name)
+        out = np.asarray(exe(*args), dtype=np.float64)
+        k = self.search.c.size
+        m1 = out[2:2 + k].reshape(self.search.c.shape)
+        m2 = out[2 + k:2 + 2 * k].reshape(self.search.c.shape)
+        g = out[2 + 2 * k:].reshape(N_DENSITIES, full)[:, :n].ravel()
+        return float(out[0]), float(out[1]), m1, m2, g
 
     def level(self, stride: int) -> Level:
         return self.fine if stride == 1 else make_level(self.problem.grid, self.support, stride)
@@ -276,8 +310,7 @@ class _Context:
         coarse grid cannot follow lines, so the table grid's would be out of reach)."""
         if level.stride not in self._var_refs:
             V = init_mod.equal_mass_partition(self.problem, level.grid)
-            self._var_refs[level.stride] = self._variance(self.table(
-                PARAMETERIZATIONS["values"].from_V(V, level.mask), level, "values"))
+            self._var_refs[level.stride] = self._reference(level, V)[1]
         return self._var_refs[level.stride]
 
     def _j(self, level: Level):
@@ -311,22 +344,15 @@ class _Context:
         """The scalar objective with gradient for SciPy/Ipopt in parameterization ``name``
         on ``level`` (variance penalty against ``var_ref_for(level)``)."""
         var_ref = self.var_ref_for(level)
-        E, mask = self._j(level)
-        rest = (E, self.s, mask, self.dg, self.arr, self.glx, self.glw, var_ref, self.mu, PENALTY_MARGIN)
-        exe = []  # the executable, bound at the first evaluation (which may compile)
 
         def f(x: np.ndarray):
             if self.out_of_budget():
                 raise _OutOfBudget
-            xj = _put(x)
             try:
-                if not exe:
-                    exe.append(_penalized_in.bind(xj, *rest, name=name))
-                out = np.asarray(exe[0](xj, *rest), dtype=np.float64)
+                val, J, _, _, g = self.evaluate(x, level, name, var_ref, self.mu)
             except aot.CompileWouldOverrun:  # the time cap: keep the best point so far
                 self.timed_out = True
                 raise _OutOfBudget from None
-            val, J, g = float(out[0]), float(out[1]), out[2:]
             self.nfev += 1
             if not np.isfinite(val) or not np.all(np.isfinite(g)):
                 # A step into a region the objective cannot evaluate: make it unattractive.
@@ -547,14 +573,52 @@ def _alternate(ctx: _Context, pt: _Point, level: Level, stop_at: int, stage_iter
     return pt, rounds
 
 
+#: When no finalist passes the health check: up to this many more runs from the best one,
+#: each with a ten times heavier variance penalty and ``REPAIR_SHARE`` of the evaluation
+#: budget on top of it.
+REPAIRS = 2
+REPAIR_SHARE = 0.15
+
+
 def _best_accepted(ctx: _Context, finalists: list, P0: np.ndarray, who: str) -> SolverResult:
-    """The lowest-value finalist whose table passes the health check, else P0."""
+    """The lowest-value finalist whose table passes the health check, else P0.
+
+    The variance penalty is soft and judged on the search problem, the health check is
+    exact, so a finalist still falling steeply when the budget ends can miss the check by a
+    hair (a line at the range's edge: X's std 0.5 % above the initialization's), and
+    returning the initialization then throws the whole search away (0.13 x uniform instead
+    of 0.02). Before that, the best finalist is run again with a heavier penalty (the same
+    executable: the weight is an argument)."""
     finalists = sorted(finalists, key=lambda t: t[0].val)
-    for pt, rounds in finalists:
-        P = _table_of(ctx, pt)
-        if health_mod.health(ctx.problem, P).accepted(ctx.health_init):
-            return _finish(ctx, P, f"{who}: best start '{pt.name}' after {rounds} round(s), "
-                                   f"{ctx.nfev} evaluations")
+
+    def first_accepted(cands, note=""):
+        for pt, rounds in cands:
+            P = _table_of(ctx, pt)
+            if health_mod.health(ctx.problem, P).accepted(ctx.health_init):
+                return _finish(ctx, P, f"{who}: best start '{pt.name}' after {rounds} round(s), "
+                                       f"{ctx.nfev} evaluations{note}")
+        return None
+
+    found = first_accepted(finalists)
+    if found is not None:
+        return found
+    pt, rounds = finalists[0] if finalists else (None, 0)
+    extra = int(REPAIR_SHARE * ctx.max_evals)
+    for k in range(1, REPAIRS + 1 if finalists and extra >= 10 and not ctx.timed_out else 1):
+        # Hold every channel where the exact problem is worse than the search problem says
+        # to a reference lowered by that discrepancy, with a heavier weight.
+        x = PARAMETERIZATIONS["values"].from_V(pt.on(ctx.fine), ctx.fine.mask)
+        ref = np.asarray(ctx.var_ref_for(ctx.fine))
+        _, _, m1, m2, _ = ctx.evaluate(x, ctx.fine, "values", ctx.var_ref_for(ctx.fine), ctx.mu)
+        on_search = (m2 - (m1 - ctx.search.c) ** 2) / ref
+        exact = (health_mod.health(ctx.problem, _table_of(ctx, pt)).std / ctx.health_init.std) ** 2
+        ctx._var_refs[1] = jax.device_put(ref * np.minimum(1.0, on_search / np.maximum(exact, 1e-300)))
+        ctx.mu *= 10.0
+        ctx.max_evals = ctx.nfev + extra
+        pt = _run_scipy(ctx, pt, ctx.fine, "values", "L-BFGS-B", extra)
+        found = first_accepted([(pt, rounds)], f" (then {k} run(s) with a heavier variance penalty)")
+        if found is not None:
+            return found
     return _finish(ctx, np.asarray(P0), f"{who}: no optimized table passed the health check; "
                    "returning the initialization")
 
