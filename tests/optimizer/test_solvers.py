@@ -87,6 +87,25 @@ def test_optimize_spectrum_returns_an_accepted_result():
     assert ev.J_uniform == pytest.approx(r.J_uniform, rel=1e-12)
 
 
+def test_a_second_search_keeps_only_a_better_accepted_table(monkeypatch):
+    """A result above the threshold is searched again (more starts kept, more evaluations);
+    the second table replaces the first only if its J is lower and it is accepted."""
+    from wavelength_pdf import optimize as opt
+
+    options = {"max_evals": 60}
+    monkeypatch.setattr(opt, "SECOND_SEARCH_ABOVE", np.inf)  # never
+    first = optimize_spectrum(_lamp(), grid=GRID, solver_options=options)
+    monkeypatch.setattr(opt, "SECOND_SEARCH_ABOVE", 0.0)  # always
+    both = optimize_spectrum(_lamp(), grid=GRID, solver_options=options)
+    assert both.accepted and both.J <= first.J
+    if "second search" in both.message:
+        assert both.J < first.J and len(both.history) > len(first.history)
+    else:  # the second search found nothing better: the first table stands
+        np.testing.assert_array_equal(both.table.pdfs, first.table.pdfs)
+    again = optimize_spectrum(_lamp(), grid=GRID, solver_options=options)
+    np.testing.assert_array_equal(again.table.pdfs, both.table.pdfs)
+
+
 def test_optimize_spectrum_rejects_unknown_solver_and_grid():
     with pytest.raises(ValueError, match="unknown solver"):
         optimize_spectrum(_lamp(), solver="gurobi")

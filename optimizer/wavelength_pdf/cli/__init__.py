@@ -115,7 +115,9 @@ def solver_args(parser: argparse.ArgumentParser, names: list[str]) -> None:
                              "evaluation budget, which keeps results reproducible)")
     parser.add_argument("--max-evals", type=positive_int, default=None, metavar="N",
                         help="the solver's evaluation budget per spectrum (default: the "
-                             "solver's own); same input, seed and budget give the same table")
+                             "solver's own); same input, seed and budget give the same table; a "
+                             "multistage result above 0.05 x uniform J gets a second search of "
+                             "1.5 N with more starts kept")
     parser.add_argument("--quiet", "-q", action="store_true",
                         help="no progress bar (the one-line summary is still printed)")
 
