@@ -97,9 +97,15 @@ def unbiased(spectrum, table: Path, res: int, spp: int, runs: int, out: Path, sa
         xml = rm.write_variant(SCENE_XML, out / f"unbiased-{m}.xml", m, table, 380.0, 780.0, sampler=sampler)
         means[m] = np.array([rm.render_image(xml, params, spp, 500 + k, variant).mean(axis=(0, 1))
                              for k in range(n_runs[m])])
-    (mt, st), (mv, sv) = [(a.mean(0), a.std(0, ddof=1) / np.sqrt(len(a))) for a in (means["table"], means["visible"])]
     for m, n in n_runs.items():
         print(f"{m}: {n} x {res}x{res} x {spp} spp ({n * res * res * spp / 1e6:.0f} M paths, {sampler}, {variant})")
+    _print_means(means)
+
+
+def _print_means(means: dict) -> None:
+    """Mean RGB of the table's and the default's per-seed image means, their standard
+    errors, and the relative difference."""
+    (mt, st), (mv, sv) = [(a.mean(0), a.std(0, ddof=1) / np.sqrt(len(a))) for a in (means["table"], means["visible"])]
     print(f"table   mean RGB {mt} +- {st}")
     print(f"default mean RGB {mv} +- {sv}")
     print(f"relative difference table/default - 1: {mt / mv - 1}  (+- {np.hypot(st, sv) / mv})")
@@ -124,11 +130,8 @@ def direct(spectrum, table: Path, spp: int, runs: int, variant: str = VARIANT) -
         scene = mi.load_dict({"type": "scene", "integrator": {"type": "path", "max_depth": 2}, "sensor": sensor, "env": env})
         means[m] = np.array([np.asarray(mi.render(scene, seed=k), dtype=np.float64)[..., :3].mean(axis=(0, 1))
                              for k in range(runs)])
-    (mt, st), (mv, sv) = [(a.mean(0), a.std(0, ddof=1) / np.sqrt(len(a))) for a in (means["table"], means["visible"])]
     print(f"lamp seen directly: {runs} x 64x64 x {spp} spp per method ({runs * 4096 * spp / 1e6:.0f} M paths, {variant})")
-    print(f"table   mean RGB {mt} +- {st}")
-    print(f"default mean RGB {mv} +- {sv}")
-    print(f"relative difference table/default - 1: {mt / mv - 1}  (+- {np.hypot(st, sv) / mv})")
+    _print_means(means)
 
 
 def main(argv=None) -> int:

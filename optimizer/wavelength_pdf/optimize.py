@@ -182,6 +182,7 @@ def optimize_spectrum(
     offset[0] += run.nfev
     P = _normalize_rows(grid, run.P)
     J, J_fine = objective.J_pair(problem, P)
+    health = None  # the result's, when already computed
     left = None if max_seconds is None else t0 + max_seconds - time.monotonic()
     if solver == "multistage" and J > SECOND_SEARCH_ABOVE * J_uniform and run.history and (left is None or left > 0):
         options = dict(solver_options or {})
@@ -190,16 +191,17 @@ def optimize_spectrum(
         second = search(options, left)
         offset[0] += second.nfev
         P2 = _normalize_rows(grid, second.P)
-        J2 = objective.J(problem, P2)
-        if J2 < J and health_mod.health(problem, P2).accepted(health_init):
+        J2, J2_fine = objective.J_pair(problem, P2)
+        health2 = health_mod.health(problem, P2)
+        if J2 < J and health2.accepted(health_init):
             history += [min(history[-1], h) for h in second.history]
             run = SolverResult(P=P2, J=J2, history=history, nfev=run.nfev + second.nfev,
                                message=f"{second.message} (second search: J above {SECOND_SEARCH_ABOVE:g} x "
                                        f"uniform after the first, {J / J_uniform:.3g})")
-            P, (J, J_fine) = P2, objective.J_pair(problem, P2)
+            P, J, J_fine, health = P2, J2, J2_fine, health2
     result = Result.judge(
         Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=J_uniform,
-        J_init=J_init, health=health_mod.health(problem, P),
+        J_init=J_init, health=health if health is not None else health_mod.health(problem, P),
         health_init=health_init, name=getattr(spectrum, "name", ""),
         source=_source(spectrum, reflectances), solver=solver, seed=seed, history=history,
         message=run.message)

@@ -271,8 +271,11 @@ class _Context:
         x = PARAMETERIZATIONS["values"].from_V(V, level.mask)
         _, J, m1, m2, _ = self.evaluate(x, level, "values", self._unit, 0.0)
         c = self.search.c
-        var = np.maximum(m2 - (m1 - c) ** 2, 0.0)
-        return J, jax.device_put(np.maximum(var, 1e-24 * c**2 + 1e-300))
+        return J, jax.device_put(np.maximum(self.variance(m1, m2), 1e-24 * c**2 + 1e-300))
+
+    def variance(self, m1: np.ndarray, m2: np.ndarray) -> np.ndarray:
+        """Per-channel variance of C(u) from E[C] and E[(C - c)^2] (search problem)."""
+        return np.maximum(m2 - (m1 - self.search.c) ** 2, 0.0)
 
     def evaluate(self, x: np.ndarray, level: Level, name: str, var_ref: jax.Array, mu: float):
         """(penalized value, J, E[C], E[(C - c)^2], gradient) at parameters x of ``name`` on
@@ -602,15 +605,17 @@ def _best_accepted(ctx: _Context, finalists: list, P0: np.ndarray, who: str) -> 
     found = first_accepted(finalists)
     if found is not None:
         return found
-    pt, rounds = finalists[0] if finalists else (None, 0)
     extra = int(REPAIR_SHARE * ctx.max_evals)
-    for k in range(1, REPAIRS + 1 if finalists and extra >= 10 and not ctx.timed_out else 1):
+    repairs = REPAIRS if finalists and extra >= 10 and not ctx.timed_out else 0
+    pt, rounds = finalists[0] if finalists else (None, 0)
+    for k in range(1, repairs + 1):
         # Hold every channel where the exact problem is worse than the search problem says
         # to a reference lowered by that discrepancy, with a heavier weight.
         x = PARAMETERIZATIONS["values"].from_V(pt.on(ctx.fine), ctx.fine.mask)
-        ref = np.asarray(ctx.var_ref_for(ctx.fine))
-        _, _, m1, m2, _ = ctx.evaluate(x, ctx.fine, "values", ctx.var_ref_for(ctx.fine), ctx.mu)
-        on_search = (m2 - (m1 - ctx.search.c) ** 2) / ref
+        ref_device = ctx.var_ref_for(ctx.fine)
+        ref = np.asarray(ref_device)
+        _, _, m1, m2, _ = ctx.evaluate(x, ctx.fine, "values", ref_device, ctx.mu)
+        on_search = ctx.variance(m1, m2) / ref
         exact = (health_mod.health(ctx.problem, _table_of(ctx, pt)).std / ctx.health_init.std) ** 2
         ctx._var_refs[1] = jax.device_put(ref * np.minimum(1.0, on_search / np.maximum(exact, 1e-300)))
         ctx.mu *= 10.0
