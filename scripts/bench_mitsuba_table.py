@@ -189,7 +189,7 @@ def main(argv=None) -> int:
     p.add_argument("--runs", type=int, default=None, help="alternating runs (cost, default 5) or seeds (unbiased, 16)")
     p.add_argument("--table-runs", type=int, default=None,
                    help="seeds of the table in --unbiased (default --runs; its images are far less noisy)")
-    p.add_argument("--variant", default=VARIANT, help=f"Mitsuba variant of --unbiased (default {VARIANT})")
+    p.add_argument("--variant", default=VARIANT, help=f"Mitsuba variant of --unbiased and --direct (default {VARIANT})")
     p.add_argument("--sampler", default="ldsampler",
                    help="Mitsuba sample generator of --unbiased (default ldsampler: randomly scrambled, so "
                         "unbiased, and less noisy than independent under line spectra)")
