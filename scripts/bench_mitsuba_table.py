@@ -111,9 +111,7 @@ def _print_block_delta_e(images: dict, block: int, draws: int = 4000) -> None:
     pixels, beside what seed-to-seed noise alone predicts when both have the same expectation:
     a parametric bootstrap that adds to the pooled block means a normal difference with the
     two methods' per-block RGB covariances (over seeds, divided by the number of seeds)."""
-    import colour
-
-    from wavelength_pdf.evaluation.metrics import rgb_to_lab
+    from wavelength_pdf.evaluation.metrics import delta_e_map
 
     def blocks(a):  # (seeds, h, w, 3) -> (seeds, blocks, 3)
         s, h, w, _ = a.shape
@@ -122,7 +120,7 @@ def _print_block_delta_e(images: dict, block: int, draws: int = 4000) -> None:
 
     bt, bv = blocks(images["table"]), blocks(images["visible"])
     mt, mv = bt.mean(0), bv.mean(0)
-    observed = np.asarray(colour.delta_E(rgb_to_lab(mt), rgb_to_lab(mv), method="CIE 2000"))
+    observed = delta_e_map(mt, mv)
 
     def cov_of_mean(b):  # (blocks, 3, 3)
         d = b - b.mean(0)
@@ -133,7 +131,7 @@ def _print_block_delta_e(images: dict, block: int, draws: int = 4000) -> None:
     pooled = (mt * len(bt) + mv * len(bv)) / (len(bt) + len(bv))
     z = np.random.default_rng(1).standard_normal((draws, *pooled.shape))
     noisy = pooled + np.einsum("bij,dbj->dbi", chol, z)
-    sim = np.asarray(colour.delta_E(rgb_to_lab(np.broadcast_to(pooled, noisy.shape)), rgb_to_lab(noisy), method="CIE 2000"))
+    sim = delta_e_map(np.broadcast_to(pooled, noisy.shape), noisy)
     mean_q = np.quantile(sim.mean(1), [0.5, 0.95])
     max_q = np.quantile(sim.max(1), [0.5, 0.95])
     print(f"block CIEDE2000, table against default ({len(observed)} blocks of {block}x{block} px): "
