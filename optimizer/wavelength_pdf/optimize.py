@@ -192,8 +192,8 @@ def optimize_spectrum(
         offset[0] += second.nfev
         P2 = _normalize_rows(grid, second.P)
         J2, J2_fine = objective.J_pair(problem, P2)
-        health2 = health_mod.health(problem, P2)
-        if J2 < J and health2.accepted(health_init):
+        health2 = health_mod.health(problem, P2) if J2 < J else None  # only a better table needs it
+        if health2 is not None and health2.accepted(health_init):
             history += [min(history[-1], h) for h in second.history]
             run = SolverResult(P=P2, J=J2, history=history, nfev=run.nfev + second.nfev,
                                message=f"{second.message} (second search: J above {SECOND_SEARCH_ABOVE:g} x "
