@@ -82,3 +82,50 @@ def test_zero_mixture_ends_weigh_nothing(name):
     pdf = run(s, m, lambda x: s.sample_four(x)[1], np.array([0.0, 1.0]))
     np.testing.assert_array_equal(lam, [[400.0, 600.0]] * 4)  # (lane, u)
     assert np.all(np.isfinite(pdf)) and np.all(pdf == 0.0)
+
+
+def _spiky_table(rng) -> Table:
+    """Four densities with zero runs, a spike a node wide, a tail of tiny mass and a density
+    equal to another (shared CDF values): the cases where segments tie or hold no mass."""
+    grid = np.unique(np.concatenate([np.linspace(380.0, 780.0, 81), [545.9, 546.0, 546.1]]))
+    pdfs = np.zeros((4, grid.size))
+    pdfs[0, 10:30] = rng.random(20)
+    pdfs[0, np.searchsorted(grid, 546.0)] = 500.0
+    pdfs[1] = np.where(grid > 600.0, 1e-9, 0.0)
+    pdfs[1, 40] = 1.0
+    pdfs[2] = pdfs[0]
+    pdfs[3, :-5] = 1.0 + rng.random(grid.size - 5)
+    pdfs[3, 50:60] = 0.0
+    pdfs /= np.trapezoid(pdfs, grid, axis=1)[:, None]
+    return Table(grid, pdfs)
+
+
+@pytest.mark.parametrize("name", VARIANTS)
+def test_merged_search_equals_four_searches(name):
+    """One search over the union of the CDFs' node values (module docstring) finds each
+    density's segment exactly as its own search would: the largest i in [0, M-2] with
+    F_k[i] <= u, then no later than the last segment with mass; at every node value, the
+    floats beside it, random u, and u outside [0, 1]."""
+    _, m = variant(name)
+    t = _spiky_table(np.random.default_rng(11))
+    s = TableSampler(t, m)
+    Fs, lasts = [], []
+    for p in t.pdfs:
+        seg = 0.5 * (p[1:] + p[:-1]) * np.diff(t.grid)
+        cum = np.concatenate([[0.0], np.cumsum(seg)])
+        Fs.append(np.minimum(cum / cum[-1], 1.0))
+        lasts.append(int(np.nonzero(p[1:] + p[:-1] > 0)[0][-1]))
+    nodes = np.concatenate(Fs)
+    u = np.concatenate([nodes, np.nextafter(nodes, 2.0), np.nextafter(nodes, -1.0),
+                        np.random.default_rng(12).random(2000), [-0.25, 0.0, 1.0, 1.5]])
+    if not s.jit:
+        u = u[::7]  # one Python call per value
+    assert s.n_merged < 4 * (t.grid.size - 1)  # the shared CDF values merged
+    for k in range(4):
+        uc = np.clip(u, 0.0, 1.0)
+        want = np.minimum(np.clip(np.searchsorted(Fs[k], uc, side="right") - 1, 0, t.grid.size - 2), lasts[k])
+        got = run(s, m, lambda x, k=k: s.sample_segment(k, x)[0], u)
+        np.testing.assert_array_equal(got, want)
+        # and sample_four's wavelengths lie in those segments
+        lam = run(s, m, lambda x, k=k: s.sample_four(x)[0][k], u)
+        assert np.all((lam >= t.grid[want]) & (lam <= t.grid[want + 1]))
