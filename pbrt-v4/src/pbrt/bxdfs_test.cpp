@@ -326,6 +326,21 @@ TEST(Fresnel, RefractObeysSnellAndReverses) {
     }
 }
 
+TEST(Fresnel, PrincipalSqrtIsLibmsSqrt) {
+    // Every quadrant, both axes (with signed zeros), tiny and large magnitudes: the branch
+    // cut (negative real axis) must follow the sign of the imaginary part, as csqrt does.
+    const double values[] = {0.0, -0.0, 1e-30, -1e-30, 1e-7, -1e-7, 0.3, -0.3, 1.0, -1.0, 2.5, -2.5, 1e12, -1e12};
+    for (double x : values)
+        for (double y : values) {
+            std::complex<double> want = std::sqrt(std::complex<double>(x, y));
+            std::complex<double> got = PrincipalSqrt({x, y});
+            double scale = std::abs(want) + 1e-300;
+            EXPECT_LE(std::abs(got - want), 4e-16 * scale) << x << " + " << y << "i";
+            EXPECT_EQ(std::signbit(got.imag()), std::signbit(want.imag())) << x << " + " << y << "i";
+            EXPECT_GE(got.real(), 0) << x << " + " << y << "i";
+        }
+}
+
 TEST(Fresnel, ComplexReducesToDielectricAndToPerfectMirror) {
     for (Float cosI : {0.02f, 0.2f, 0.6f, 1.0f}) {
         EXPECT_NEAR(FrComplex(cosI, std::complex<Float>(1.5f, 0)), FrDielectric(cosI, 1.5f), 1e-5)
