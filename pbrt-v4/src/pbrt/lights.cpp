@@ -188,7 +188,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             ls.wi = Normalize(f.FromLocal(SphericalDirection(std::sqrt(sin2Theta), cosTheta, phi)));
             Float t = dc * cosTheta - SafeSqrt(Sqr(R) - dc2 * sin2Theta);
             Point3f pObj = sphere->objectFromRender.ApplyPoint(ctx.p + ls.wi * t);
-            sphere->Interaction(pObj, &s);
+            sphere->SurfacePoint(pObj, &s.p, &s.pError, &s.n);
             ls.pdf = 1 / (2 * Pi * oneMinusCosMax);
             ls.L = L(s.n, -ls.wi, lambda, cache);
             if (!ls.L.IsNonZero()) return std::nullopt;
@@ -201,7 +201,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
         Float z = Lerp(u.x, sphere->zMin, sphere->zMax);
         Float phi = u.y * sphere->phiMax;
         Float r = SafeSqrt(Sqr(sphere->radius) - Sqr(z));
-        sphere->Interaction(Point3f(r * std::cos(phi), r * std::sin(phi), z), &s);
+        sphere->SurfacePoint(Point3f(r * std::cos(phi), r * std::sin(phi), z), &s.p, &s.pError, &s.n);
     }
     Vector3f d = s.p - ctx.p;
     Float d2 = LengthSquared(d);

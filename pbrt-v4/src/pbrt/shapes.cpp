@@ -220,17 +220,26 @@ bool Sphere::IntersectObject(const Point3f &of, const Vector3f &df, Float tMax, 
     return false;
 }
 
-void Sphere::Interaction(const Point3f &pObjIn, SurfaceInteraction *si) const {
-    // Project onto the surface, then compute (u, v) = (phi / phiMax, theta fraction).
+Point3f Sphere::SurfacePoint(const Point3f &pObjIn, Point3f *p, Vector3f *pError, Normal3f *n) const {
+    // Project onto the surface (off the poles, where phi is undefined).
     Point3f pObj = pObjIn * (radius / Length(pObjIn));
     if (pObj.x == 0 && pObj.y == 0) pObj.x = 1e-5f * radius;
+    *p = renderFromObject.ApplyPoint(pObj);
+    *n = Normalize(renderFromObject.ApplyNormal(pObj));
+    if (reverseOrientation) *n = -*n;
+    Float rs = radius * Length(renderFromObject.ApplyVector(Vector3f(1, 0, 0)));
+    *pError = (Abs(*p) + Vector3f(rs, rs, rs)) * kPointErrorScale;
+    return pObj;
+}
+
+void Sphere::Interaction(const Point3f &pObjIn, SurfaceInteraction *si) const {
+    // The point, then (u, v) = (phi / phiMax, theta fraction) and the derivatives.
+    Normal3f n;
+    Point3f pObj = SurfacePoint(pObjIn, &si->p, &si->pError, &n);
     Float phi = std::atan2(pObj.y, pObj.x);
     if (phi < 0) phi += 2 * Pi;
     Float theta = SafeACos(pObj.z / radius);
     si->uv = Point2f(phi / phiMax, (theta - thetaZMin) / (thetaZMax - thetaZMin));
-    si->p = renderFromObject.ApplyPoint(pObj);
-    Normal3f n = Normalize(renderFromObject.ApplyNormal(pObj));
-    if (reverseOrientation) n = -n;
     si->n = si->ns = n;
     si->dpdu = renderFromObject.ApplyVector(Vector3f(-phiMax * pObj.y, phiMax * pObj.x, 0));
     // dp/dv = (thetaMax - thetaMin) (z cos(phi), z sin(phi), -r sin(theta)).
@@ -240,8 +249,6 @@ void Sphere::Interaction(const Point3f &pObjIn, SurfaceInteraction *si) const {
         (thetaZMax - thetaZMin) * Vector3f(pObj.z * cosPhi, pObj.z * sinPhi, -radius * std::sin(theta)));
     if (LengthSquared(Cross(si->dpdu, n)) == 0 || LengthSquared(Cross(si->dpdv, n)) == 0)
         CoordinateSystem(n, &si->dpdu, &si->dpdv);
-    Float rs = radius * Length(renderFromObject.ApplyVector(Vector3f(1, 0, 0)));
-    si->pError = (Abs(si->p) + Vector3f(rs, rs, rs)) * kPointErrorScale;
     si->faceIndex = 0;
 }
 

@@ -82,6 +82,9 @@ struct Sphere {
     bool IntersectObject(const Point3f &o, const Vector3f &d, Float tMax, Float *tHit) const;
     // The surface at object-space point pObj, in render space.
     void Interaction(const Point3f &pObj, SurfaceInteraction *si) const;
+    // Only the position, its error bound and the normal of Interaction (the same values),
+    // for light sampling, which needs no (u, v) or derivatives; returns the projected pObj.
+    Point3f SurfacePoint(const Point3f &pObj, Point3f *p, Vector3f *pError, Normal3f *n) const;
     // Uniform factor of renderFromObject, or 0 if the transform is not a similarity
     // (rotation, translation, uniform scale).
     Float SimilarityScale() const;
