@@ -33,7 +33,7 @@ namespace {
 // by MIS against BSDF sampling.
 SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const BSDF &bsdf,
                          const SampledWavelengths &lambda, Sampler &sampler,
-                         SampledSpectrumCache &emission) {
+                         SampledSpectrumCache &spectra) {
     Float uLight = sampler.Get1D();
     Point2f u = sampler.Get2D();
     Float pmf;
@@ -41,7 +41,7 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
     if (li < 0 || pmf == 0) return SampledSpectrum(0);
     const Light &light = scene.lights[li];
     LightSampleContext ctx{si.p, si.n, si.pError};
-    std::optional<LightLiSample> ls = light.SampleLi(ctx, u, lambda, &emission);
+    std::optional<LightLiSample> ls = light.SampleLi(ctx, u, lambda, &spectra);
     if (!ls || !ls->L.IsNonZero() || ls->pdf == 0) return SampledSpectrum(0);
 
     SampledSpectrum f = bsdf.f(si.wo, ls->wi) * AbsDot(ls->wi, si.ns);
@@ -65,14 +65,14 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
     bool specularBounce = false;
     LightSampleContext prevCtx;
     SurfaceInteraction si;
-    SampledSpectrumCache emission;  // emitters' spectra at lambda (cleared when it changes)
+    SampledSpectrumCache spectra;  // emitters' and conductors' spectra at lambda (cleared when it changes)
 
     while (true) {
         if (!scene.accel->Intersect(ray, &si)) {
             // Escaped: radiance of the infinite lights, MIS-weighted against NEE.
             for (int li : scene.infiniteLights) {
                 const Light &light = scene.lights[li];
-                SampledSpectrum Le = light.Le(lambda, &emission);
+                SampledSpectrum Le = light.Le(lambda, &spectra);
                 if (!Le.IsNonZero()) continue;
                 if (depth == 0 || specularBounce) {
                     L += beta * Le;
@@ -87,7 +87,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         // Emission from an area light that was hit.
         if (si.areaLight >= 0) {
             const Light &light = scene.lights[si.areaLight];
-            SampledSpectrum Le = light.L(si.n, si.wo, lambda, &emission);
+            SampledSpectrum Le = light.L(si.n, si.wo, lambda, &spectra);
             if (Le.IsNonZero()) {
                 if (depth == 0 || specularBounce) {
                     L += beta * Le;
@@ -103,7 +103,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         // Initialized, not assigned: the BSDF is built in place (no copy of its variant).
         bool wasTerminated = lambda.SecondaryTerminated();
         std::optional<BSDF> bsdf = si.material >= 0
-            ? GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); })
+            ? GetBSDF(scene.materials[si.material], si, lambda, [&] { return sampler.Get1D(); }, &spectra)
             : std::nullopt;
         if (si.material >= 0) {
             // Dispersion kept one wavelength: the other slots no longer count (their pdf is
@@ -111,7 +111,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
             if (!wasTerminated && lambda.SecondaryTerminated()) {
                 for (int i = 0; i < NSpectrumSamples; ++i)
                     if (i != lambda.SurvivingIndex()) beta[i] = 0;
-                emission.Clear();
+                spectra.Clear();
             }
         }
         if (!bsdf) {
@@ -122,7 +122,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         if (depth++ == maxDepth) break;
         if (bsdf->IsBlack()) break;
 
-        if (bsdf->IsNonSpecular()) L += beta * SampleLd(scene, si, *bsdf, lambda, sampler, emission);
+        if (bsdf->IsNonSpecular()) L += beta * SampleLd(scene, si, *bsdf, lambda, sampler, spectra);
 
         // Continue the path in a BSDF-sampled direction.
         Float uc = sampler.Get1D();

@@ -31,13 +31,17 @@ struct MakeBxDF {
     const TextureEvalContext &ctx;
     SampledWavelengths &lambda;
     const std::function<Float()> &uFresh;
+    SampledSpectrumCache *spectra;
 
     BxDF operator()(const DiffuseMaterial &d) const {
         return DiffuseBxDF(Clamp(d.reflectance->Evaluate(ctx, lambda), Float(0), Float(1)));
     }
     BxDF operator()(const ConductorMaterial &c) const {
         SampledSpectrum eta, k;
-        if (c.eta) {
+        if (spectra && c.etaConstant && c.kConstant) {
+            eta = spectra->Get(*c.etaConstant, lambda);
+            k = spectra->Get(*c.kConstant, lambda);
+        } else if (c.eta) {
             eta = c.eta->Evaluate(ctx, lambda);
             k = c.k->Evaluate(ctx, lambda);
         } else {
@@ -79,7 +83,8 @@ const FloatTexture *Displacement(const Material &m) {
 }  // namespace
 
 std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
-                            SampledWavelengths &lambda, const std::function<Float()> &uFresh) {
+                            SampledWavelengths &lambda, const std::function<Float()> &uFresh,
+                            SampledSpectrumCache *spectra) {
     if (std::holds_alternative<InterfaceMaterial>(m)) return std::nullopt;
     // Bump mapping first: it changes the shading frame the BSDF lives in.
     Normal3f ns = si.ns;
@@ -90,7 +95,7 @@ std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
         dpdu = b.dpdu;
     }
     TextureEvalContext ctx{si.p, si.uv};
-    return BSDF(ns, dpdu, std::visit(MakeBxDF{ctx, lambda, uFresh}, m));
+    return BSDF(ns, dpdu, std::visit(MakeBxDF{ctx, lambda, uFresh, spectra}, m));
 }
 
 namespace {
@@ -156,6 +161,8 @@ Material CreateMaterial(const std::string &type, const ParameterDictionary &para
             if (!c.eta) c.eta = NamedMetal("metal-Cu-eta", loc);
             if (!c.k) c.k = NamedMetal("metal-Cu-k", loc);
         }
+        if (c.eta) c.etaConstant = c.eta->Constant();
+        if (c.k) c.kConstant = c.k->Constant();
         c.roughness = GetRoughness(params, textures);
         c.displacement = displacement;
         return c;

@@ -41,6 +41,7 @@ struct MaterialRoughness {
 };
 struct ConductorMaterial {
     SpectrumTextureHandle eta, k;     // both set, or both null and reflectance set
+    SpectrumHandle etaConstant, kConstant;  // their spectra when constant (cached per path)
     SpectrumTextureHandle reflectance;
     MaterialRoughness roughness;
     FloatTextureHandle displacement;
@@ -66,9 +67,12 @@ using Material = std::variant<DiffuseMaterial, InterfaceMaterial, ConductorMater
 
 // The BSDF at a hit; nullopt for "interface". A material with a spectrally varying eta
 // terminates the secondary wavelengths of lambda (design §1), choosing the kept one with a
-// fresh uniform number from uFresh (called only then).
+// fresh uniform number from uFresh (called only then). spectra, when given, holds constant
+// spectra at lambda for the path (a conductor's eta and k), so that they are evaluated once
+// per path; the caller clears it when lambda changes.
 std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
-                            SampledWavelengths &lambda, const std::function<Float()> &uFresh);
+                            SampledWavelengths &lambda, const std::function<Float()> &uFresh,
+                            SampledSpectrumCache *spectra = nullptr);
 
 // Creates a material of the given type ("string type" of MakeNamedMaterial, or the name
 // in Material). Throws PbrtError at loc for unsupported types and parameters. seed feeds

@@ -158,7 +158,7 @@ class SceneBuilder : public ParserTarget {
         graphicsState.colorSpace = RGBColorSpace::sRGB;
         // pbrt-v4's default material: diffuse with reflectance 0.5.
         scene->materials.push_back(
-            DiffuseMaterial{MakeConstantSpectrumTexture(std::make_shared<ConstantSpectrum>(0.5f))});
+            DiffuseMaterial{MakeConstantSpectrumTexture(std::make_shared<ConstantSpectrum>(0.5f)), nullptr});
         scene->materialWhere.push_back("default material");
         scene->materialUsed.push_back(0);
         graphicsState.material.index = 0;

@@ -191,8 +191,9 @@ class Spectrum {
 using SpectrumHandle = std::shared_ptr<const Spectrum>;
 
 // The values of a few spectra at one set of wavelengths, remembered: a path evaluates its
-// emitters' spectra at the same four wavelengths at every vertex (next-event estimation,
-// emission hits), and a tabulated spectrum costs a search per wavelength. The owner must
+// emitters' spectra (next-event estimation, emission hits) and its conductors' eta and k at
+// the same four wavelengths at every vertex, and a tabulated spectrum costs a search per
+// wavelength. The owner must
 // Clear() it whenever the wavelengths change. The values are those of Spectrum::Sample.
 class SampledSpectrumCache {
   public:
@@ -208,7 +209,7 @@ class SampledSpectrumCache {
     }
 
   private:
-    static constexpr int kSize = 4;
+    static constexpr int kSize = 8;  // a few lamps and a few metals
     std::array<const Spectrum *, kSize> keys{};
     std::array<SampledSpectrum, kSize> values;
     int next = 0;
