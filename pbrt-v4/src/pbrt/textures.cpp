@@ -166,7 +166,7 @@ class ImageSpectrum : public SpectrumTexture {
 
 }  // namespace
 
-float TextureImage::Texel(int x, int y, int c) const {
+ptrdiff_t TextureImage::TexelOffset(int x, int y) const {
     switch (wrap) {
     case Wrap::Repeat:
         x = ((x % width) + width) % width;
@@ -177,10 +177,10 @@ float TextureImage::Texel(int x, int y, int c) const {
         y = Clamp(y, 0, height - 1);
         break;
     case Wrap::Black:
-        if (x < 0 || x >= width || y < 0 || y >= height) return 0;
+        if (x < 0 || x >= width || y < 0 || y >= height) return -1;
         break;
     }
-    return pixels[(size_t(y) * width + x) * channels + c];
+    return (ptrdiff_t(y) * width + x) * channels;
 }
 
 void TextureImage::Bilerp(Point2f st, float out[3]) const {
@@ -188,10 +188,17 @@ void TextureImage::Bilerp(Point2f st, float out[3]) const {
     Float x = st.x * width - 0.5f, y = (1 - st.y) * height - 0.5f;
     int xi = int(std::floor(x)), yi = int(std::floor(y));
     Float dx = x - xi, dy = y - yi;
+    // The four texels wrapped once each (not once per channel: the wrap's integer divisions
+    // were most of a lookup's time), then the weights in the order of the formula
+    // (1 - dx)(1 - dy) T00 + dx (1 - dy) T10 + (1 - dx) dy T01 + dx dy T11.
+    const ptrdiff_t o[4] = {TexelOffset(xi, yi), TexelOffset(xi + 1, yi), TexelOffset(xi, yi + 1),
+                            TexelOffset(xi + 1, yi + 1)};
+    const Float w[4] = {(1 - dx) * (1 - dy), dx * (1 - dy), (1 - dx) * dy, dx * dy};
     for (int c = 0; c < 3; ++c) {
         int cc = channels == 1 ? 0 : c;
-        out[c] = (1 - dx) * (1 - dy) * Texel(xi, yi, cc) + dx * (1 - dy) * Texel(xi + 1, yi, cc) +
-                 (1 - dx) * dy * Texel(xi, yi + 1, cc) + dx * dy * Texel(xi + 1, yi + 1, cc);
+        Float t[4];
+        for (int k = 0; k < 4; ++k) t[k] = o[k] < 0 ? 0.f : pixels[size_t(o[k]) + cc];
+        out[c] = w[0] * t[0] + w[1] * t[1] + w[2] * t[2] + w[3] * t[3];
     }
 }
 

@@ -90,7 +90,13 @@ struct TextureImage {
     std::vector<float> pixels;
     enum class Wrap { Repeat, Black, Clamp } wrap = Wrap::Repeat;
     // Texel (x, y) channel c with the wrap mode applied (x, y may be outside the image).
-    float Texel(int x, int y, int c) const;
+    float Texel(int x, int y, int c) const {
+        ptrdiff_t o = TexelOffset(x, y);
+        return o < 0 ? 0.f : pixels[size_t(o) + c];
+    }
+    // Index of texel (x, y)'s first channel in pixels after wrapping; -1 where the wrap mode
+    // makes it black.
+    ptrdiff_t TexelOffset(int x, int y) const;
     // Bilinear interpolation at st in [0,1]^2, t = 0 at the bottom row (pbrt-v4's image
     // lookup: texel centres at half-integers).
     void Bilerp(Point2f st, float out[3]) const;

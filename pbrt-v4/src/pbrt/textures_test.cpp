@@ -7,6 +7,7 @@
 #include <pbrt/textures.h>
 #include <pbrt/util/image.h>
 #include <pbrt/util/paramdict.h>
+#include <pbrt/util/rng.h>
 
 #include <gtest/gtest.h>
 
@@ -78,6 +79,32 @@ TEST(Textures, EightBitImagesAreDecodedFromSRGB) {
     EXPECT_NEAR(g->Texel(3, 0, 0), std::pow(raw->Texel(3, 0, 0), 2.2f), 1e-5);
     EXPECT_NE(ErrorOf([&] { LoadTextureImage(png, "gamma -1", TextureImage::Wrap::Clamp); }).find(png),
               std::string::npos);
+}
+
+TEST(Textures, BilerpIsTheFormulaOverWrappedTexels) {
+    // Bilerp wraps each of its four texels once; the value must be the textbook formula over
+    // Texel(), in every wrap mode, inside and far outside the image.
+    TexDir d;
+    std::string exr = d.File("bilerp.exr");
+    WriteImage(exr, GreyImage(5, 3, {0.1f, 0.7f, 0.3f, 0.9f, 0.2f, 0.5f, 0.4f, 1.0f, 0.0f, 0.6f, 0.8f, 0.25f, 0.35f, 0.45f, 0.55f}));
+    RNG rng(7);
+    for (auto wrap : {TextureImage::Wrap::Repeat, TextureImage::Wrap::Clamp, TextureImage::Wrap::Black}) {
+        auto img = LoadTextureImage(exr, "linear", wrap);
+        for (int i = 0; i < 2000; ++i) {
+            Point2f st(-2 + 5 * rng.UniformFloat(), -2 + 5 * rng.UniformFloat());
+            float v[3];
+            img->Bilerp(st, v);
+            Float x = st.x * img->width - 0.5f, y = (1 - st.y) * img->height - 0.5f;
+            int xi = int(std::floor(x)), yi = int(std::floor(y));
+            Float dx = x - xi, dy = y - yi;
+            Float want = (1 - dx) * (1 - dy) * img->Texel(xi, yi, 0) + dx * (1 - dy) * img->Texel(xi + 1, yi, 0) +
+                         (1 - dx) * dy * img->Texel(xi, yi + 1, 0) + dx * dy * img->Texel(xi + 1, yi + 1, 0);
+            // Equal up to the compiler's choice of fused multiply-adds.
+            ASSERT_NEAR(v[0], want, 1e-6f) << "wrap " << int(wrap) << " st " << st.x << "," << st.y;
+            ASSERT_EQ(v[1], v[0]);
+            ASSERT_EQ(v[2], v[0]);
+        }
+    }
 }
 
 TEST(Textures, WrapModes) {
