@@ -166,10 +166,10 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
     }
 
     // Area lights: a point on the shape, converted to a solid-angle density.
-    SurfaceInteraction s;
+    // The point, its error bound and normal go straight into ls.
     if (mesh) {
         auto b = SampleUniformTriangle(u);
-        mesh->SurfacePoint(size_t(triangle), b[1], b[2], &s.p, &s.pError, &s.n);
+        mesh->SurfacePoint(size_t(triangle), b[1], b[2], &ls.pLight, &ls.pLightError, &ls.nLight);
     } else {
         Point3f c = sphere->renderFromObject.ApplyPoint(Point3f(0, 0, 0));
         Float R = sphere->radius * sphereScale;
@@ -188,33 +188,27 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             ls.wi = Normalize(f.FromLocal(SphericalDirection(std::sqrt(sin2Theta), cosTheta, phi)));
             Float t = dc * cosTheta - SafeSqrt(Sqr(R) - dc2 * sin2Theta);
             Point3f pObj = sphere->objectFromRender.ApplyPoint(ctx.p + ls.wi * t);
-            sphere->SurfacePoint(pObj, &s.p, &s.pError, &s.n);
+            sphere->SurfacePoint(pObj, &ls.pLight, &ls.pLightError, &ls.nLight);
             ls.pdf = 1 / (2 * Pi * oneMinusCosMax);
-            ls.L = L(s.n, -ls.wi, lambda, cache);
+            ls.L = L(ls.nLight, -ls.wi, lambda, cache);
             if (!ls.L.IsNonZero()) return std::nullopt;
-            ls.pLight = s.p;
-            ls.nLight = s.n;
-            ls.pLightError = s.pError;
             return ls;
         }
         // Inside, or a partial sphere: uniform over its area.
         Float z = Lerp(u.x, sphere->zMin, sphere->zMax);
         Float phi = u.y * sphere->phiMax;
         Float r = SafeSqrt(Sqr(sphere->radius) - Sqr(z));
-        sphere->SurfacePoint(Point3f(r * std::cos(phi), r * std::sin(phi), z), &s.p, &s.pError, &s.n);
+        sphere->SurfacePoint(Point3f(r * std::cos(phi), r * std::sin(phi), z), &ls.pLight, &ls.pLightError, &ls.nLight);
     }
-    Vector3f d = s.p - ctx.p;
+    Vector3f d = ls.pLight - ctx.p;
     Float d2 = LengthSquared(d);
     if (d2 == 0) return std::nullopt;
     ls.wi = d / std::sqrt(d2);
-    Float cosLight = AbsDot(s.n, ls.wi);
+    Float cosLight = AbsDot(ls.nLight, ls.wi);
     if (cosLight == 0) return std::nullopt;
     ls.pdf = d2 / (area * cosLight);
-    ls.L = L(s.n, -ls.wi, lambda, cache);
+    ls.L = L(ls.nLight, -ls.wi, lambda, cache);
     if (!ls.L.IsNonZero() || !std::isfinite(ls.pdf)) return std::nullopt;
-    ls.pLight = s.p;
-    ls.nLight = s.n;
-    ls.pLightError = s.pError;
     return ls;
 }
 
