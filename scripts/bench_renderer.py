@@ -14,7 +14,8 @@ that scene loading cancels: paths per CPU-second = (extra paths) / (extra CPU se
 paths = pixels x spp. The renderers alternate, ``--reps`` times; the medians are printed.
 
 Scenes written for "bdpt" render with bdpt in upstream and with path in this ``pbrt`` (its
-documented difference); those rows say so.
+documented difference); those rows say so. With ``--upstream-path`` upstream renders them with
+"path" too, so that the ratio compares the same algorithm.
 
 Then the Mitsuba cross-check box: the project's Cornell box (``scenes/cornell-box/scene.pbrt``
 and its Mitsuba 3 twin ``scene.xml``: the same room, reflectances, camera and tri-band lamp)
@@ -42,7 +43,7 @@ A scene or binary that is missing or fails is listed with the reason; the exit s
 Usage: scripts/bench_renderer.py [--pbrt build/pbrt] [--upstream U] [--patched P]
            [--table T] [--spp 8] [--reps 3] [--cost-reps 7] [--cost-spp 32]
            [--scenes NAME ...] [--shared ../shared] [--box-spp 256] [--box-reps 2]
-           [--no-mitsuba] [--no-cost]
+           [--no-mitsuba] [--no-cost] [--upstream-path]
 """
 from __future__ import annotations
 
@@ -212,6 +213,9 @@ def main() -> int:
     ap.add_argument("--no-mitsuba", action="store_true", help="the box with this pbrt only")
     ap.add_argument("--no-box", action="store_true", help="skip the Mitsuba cross-check box")
     ap.add_argument("--no-cost", action="store_true", help="skip the table's cost in patched upstream")
+    ap.add_argument("--upstream-path", action="store_true",
+                    help="render scenes written for another integrator (bdpt) with \"path\" in upstream "
+                         "too, so that both renderers run the same algorithm")
     args = ap.parse_args()
     if args.box_spp < 1 or args.box_reps < 1:
         print("bench_renderer: --box-spp and --box-reps must be at least 1", file=sys.stderr)
@@ -246,21 +250,28 @@ def main() -> int:
                 failures += 1
                 continue
             scene = bench_copy(src, tmp / name / "scene.pbrt")
+            integrator = re.search(r'Integrator\s+"([^"]+)"', scene.read_text())
+            other_integrator = bool(integrator and integrator[1] not in ("path", "volpath"))
+            scenes = {r: scene for r in renderers}
+            if other_integrator and args.upstream_path and "upstream" in renderers:
+                path_copy = tmp / name / "scene-path.pbrt"
+                path_copy.write_text(re.sub(r'Integrator\s+"[^"]+"', 'Integrator "path"', scene.read_text(), count=1))
+                scenes["upstream"] = path_copy
             runs: dict[str, list[float]] = {r: [] for r in renderers}
             try:
                 for rep in range(args.reps):
                     order = list(renderers) if rep % 2 == 0 else list(reversed(renderers))
                     for r in order:
-                        runs[r].append(throughput(renderers[r], scene, args.spp, [], tmp, args.nthreads))
+                        runs[r].append(throughput(renderers[r], scenes[r], args.spp, [], tmp, args.nthreads))
             except BenchError as e:
                 print(f"  {name:15s} failed: {e}")
                 failures += 1
                 continue
             med = {r: statistics.median(v) for r, v in runs.items()}
-            integrator = re.search(r'Integrator\s+"([^"]+)"', scene.read_text())
             note = ""
-            if integrator and integrator[1] not in ("path", "volpath"):
-                note = f"  (upstream: {integrator[1]}; this pbrt renders it with path)"
+            if other_integrator:
+                note = ("  (written for {0}: both render it with path)" if scenes.get("upstream") is not scene
+                        else "  (upstream: {0}; this pbrt renders it with path)").format(integrator[1])
             if "upstream" in med:
                 print(f"  {name:15s} {med['this pbrt']:10.3f} {med['upstream']:10.3f} "
                       f"{med['this pbrt'] / med['upstream']:7.2f}{note}", flush=True)
