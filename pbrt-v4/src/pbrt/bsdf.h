@@ -10,6 +10,7 @@
 #include <pbrt/util/vecmath.h>
 
 #include <optional>
+#include <type_traits>
 #include <variant>
 
 namespace pbrt {
@@ -30,13 +31,26 @@ class BSDF {
         if (wo.z == 0) return SampledSpectrum(0);
         return std::visit([&](auto &b) { return b.f(wo, wi); }, bxdf);
     }
-    std::optional<BSDFSample> Sample_f(const Vector3f &woW, Float uc, Point2f u) const {
+    // exactPdf false lets a sample report its sampling density instead of PDF(wo, wi)
+    // (pdfIsProportional; the coated layer's walk), to be completed by DeferredPDF.
+    std::optional<BSDFSample> Sample_f(const Vector3f &woW, Float uc, Point2f u, bool exactPdf = true) const {
         Vector3f wo = frame.ToLocal(woW);
         if (wo.z == 0) return std::nullopt;
-        auto s = std::visit([&](auto &b) { return b.Sample_f(wo, uc, u); }, bxdf);
+        auto s = std::visit([&](auto &b) -> std::optional<BSDFSample> {
+            if constexpr (std::is_same_v<std::decay_t<decltype(b)>, CoatedDiffuseBxDF>)
+                if (!exactPdf) return b.SampleProportional(wo, uc, u);
+            return b.Sample_f(wo, uc, u);
+        }, bxdf);
         if (!s || !s->f.IsNonZero() || s->pdf == 0 || s->wi.z == 0) return std::nullopt;
+        s->woLocal = wo;
+        s->wiLocal = s->wi;
         s->wi = frame.FromLocal(s->wi);
         return s;
+    }
+    // PDF(wo, wi) of a sample this BSDF returned: the value Sample_f with exactPdf would
+    // have reported.
+    Float DeferredPDF(const BSDFSample &s) const {
+        return std::visit([&](auto &b) { return b.PDF(s.woLocal, s.wiLocal); }, bxdf);
     }
     Float PDF(const Vector3f &woW, const Vector3f &wiW) const {
         Vector3f wo = frame.ToLocal(woW), wi = frame.ToLocal(wiW);

@@ -21,6 +21,11 @@ struct BSDFSample {
     Float pdf = 0;
     bool specular = false, transmission = false;
     Float eta = 1;       // relative IOR for transmission
+    // pdf is the density of the sampling procedure (f / pdf is the sample's weight), not
+    // PDF(wo, wi), which multiple importance sampling needs: the coated layer's random walk,
+    // whose PDF is a costly estimate of its own; BSDF::DeferredPDF gives it when needed.
+    bool pdfIsProportional = false;
+    Vector3f woLocal, wiLocal;  // the pair in the shading frame (set by BSDF::Sample_f)
 };
 
 // Lambertian reflection, f = R / pi (pbrt-v4's DiffuseBxDF).

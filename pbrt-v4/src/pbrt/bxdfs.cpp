@@ -428,13 +428,25 @@ std::optional<BSDFSample> CoatedDiffuseBxDF::Sample_f(Vector3f wo, Float uc, Poi
                                                       TransportMode mode,
                                                       BxDFReflTransFlags flags) const {
     if (!Allows(flags, BxDFReflTransFlags::Reflection)) return std::nullopt;
-    std::optional<BSDFSample> s = SampleWalk(wo, uc, u, mode);
-    if (!s || s->specular) return s;
+    std::optional<BSDFSample> s = SampleProportional(wo, uc, u, mode);
+    if (!s || !s->pdfIsProportional) return s;
     // Report PDF(wo, wi) for MIS and keep the unbiased weight f / pdf.
     Float p = PDF(wo, s->wi, mode);
     if (!(p > 0)) return std::nullopt;
     s->f *= p / s->pdf;
     s->pdf = p;
+    s->pdfIsProportional = false;
+    return s;
+}
+
+std::optional<BSDFSample> CoatedDiffuseBxDF::SampleProportional(Vector3f wo, Float uc, Point2f u,
+                                                                TransportMode mode) const {
+    std::optional<BSDFSample> s = SampleWalk(wo, uc, u, mode);
+    if (!s || s->specular) return s;
+    // PDF(wo, wi) is zero (and Sample_f returns nothing) exactly when wi is not on wo's
+    // side; elsewhere its uniform share keeps it positive.
+    if (!SameHemisphere(wo, s->wi)) return std::nullopt;
+    s->pdfIsProportional = true;
     return s;
 }
 

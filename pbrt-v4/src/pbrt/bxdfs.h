@@ -123,9 +123,13 @@ class CoatedDiffuseBxDF {
                                        BxDFReflTransFlags flags = BxDFReflTransFlags::All) const;
     Float PDF(Vector3f wo, Vector3f wi, TransportMode mode = TransportMode::Radiance,
               BxDFReflTransFlags flags = BxDFReflTransFlags::All) const;
+    // Sample_f without the rescaling to PDF(): the walk's own density, marked
+    // pdfIsProportional when not specular (the same weight f / pdf; PDF(wo, wi) is left to
+    // the caller, who needs it only for multiple importance sampling).
+    std::optional<BSDFSample> SampleProportional(Vector3f wo, Float uc, Point2f u,
+                                                 TransportMode mode = TransportMode::Radiance) const;
 
   private:
-    // Sample_f without the rescaling of the returned pdf to PDF().
     std::optional<BSDFSample> SampleWalk(Vector3f wo, Float uc, Point2f u, TransportMode mode) const;
     // Transmittance through the medium over a height difference dz along w.
     static Float Tr(Float dz, const Vector3f &w);

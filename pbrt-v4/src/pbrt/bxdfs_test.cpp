@@ -8,6 +8,7 @@
 // Random numbers come from fixed seeds, so every statistical test is deterministic; the
 // thresholds are stated with each test (p-values, or multiples of the measured standard
 // error).
+#include <pbrt/bsdf.h>
 #include <pbrt/bxdfs.h>
 
 #include <pbrt/fresnel.h>
@@ -824,6 +825,36 @@ TEST(CoatedDiffuseBxDF, SamplingAgreesWithEvaluationPerBin) {
             EXPECT_GT(p, kChi2Alpha) << Describe(cfg, c) << ": chi2 = " << stat << " dof = " << dof
                                      << " p = " << p << "; worst " << worst.str();
         }
+}
+
+TEST(CoatedDiffuseBxDF, DeferredPDFCompletesAProportionalSample) {
+    // A path tracer may take the walk's own density and ask for PDF(wo, wi) only when it needs
+    // it (a hit on an emitter): the same directions, the same weight f / pdf up to rounding,
+    // and DeferredPDF equal to the pdf the eager sample reports.
+    for (const CoatConfig &cfg : kCoats) {
+        Vector3f n = Normalize(Vector3f(0.2f, 0.1f, 1));
+        BSDF bsdf(Normal3f(n.x, n.y, n.z), Vector3f(1, 0, -0.2f), MakeCoat(cfg));
+        Vector3f wo = Normalize(Vector3f(0.3f, -0.4f, 0.8f));
+        RNG rng(91);
+        int proportional = 0;
+        for (int i = 0; i < 1000; ++i) {
+            Float uc = rng.UniformFloat();
+            Point2f u(rng.UniformFloat(), rng.UniformFloat());
+            auto eager = bsdf.Sample_f(wo, uc, u);
+            auto lazy = bsdf.Sample_f(wo, uc, u, /*exactPdf=*/false);
+            ASSERT_EQ(bool(eager), bool(lazy)) << Describe(cfg, 0.8f);
+            if (!eager) continue;
+            ASSERT_FALSE(eager->pdfIsProportional);
+            ASSERT_EQ(eager->wi, lazy->wi);
+            ASSERT_EQ(lazy->pdfIsProportional, !lazy->specular);
+            if (!lazy->pdfIsProportional) continue;
+            ++proportional;
+            EXPECT_EQ(bsdf.DeferredPDF(*lazy), eager->pdf);
+            for (int c = 0; c < NSpectrumSamples; ++c)
+                EXPECT_NEAR(lazy->f[c] / lazy->pdf, eager->f[c] / eager->pdf, 1e-5f * (eager->f[c] / eager->pdf) + 1e-12f);
+        }
+        EXPECT_GT(proportional, 100) << Describe(cfg, 0.8f);
+    }
 }
 
 TEST(CoatedDiffuseBxDF, SampleReportsPDFForMISAndStaysOnOneSide) {

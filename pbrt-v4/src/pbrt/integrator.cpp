@@ -64,6 +64,17 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
     Float p_b = 1, etaScale = 1;
     bool specularBounce = false;
     LightSampleContext prevCtx;
+    // The last BSDF sample's PDF, when the sample left it for later (the coated layer's
+    // walk estimates it at some cost): only a hit on an emitter needs it, for MIS.
+    std::optional<BSDF> pdfBsdf;
+    BSDFSample pdfSample;
+    auto misPdf = [&]() {
+        if (pdfBsdf) {
+            p_b = pdfBsdf->DeferredPDF(pdfSample);
+            pdfBsdf.reset();
+        }
+        return p_b;
+    };
     SurfaceInteraction si;
     SampledSpectrumCache spectra;  // emitters' and conductors' spectra at lambda (cleared when it changes)
 
@@ -78,7 +89,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                     L += beta * Le;
                 } else {
                     Float p_l = scene.lightSampler.PMF(li) * light.PDF_Li(prevCtx, ray.d, si);
-                    L += beta * Le * PowerHeuristic(1, p_b, 1, p_l);
+                    L += beta * Le * PowerHeuristic(1, misPdf(), 1, p_l);
                 }
             }
             break;
@@ -94,7 +105,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                 } else {
                     Float p_l = scene.lightSampler.PMF(si.areaLight) *
                                 light.PDF_Li(prevCtx, Normalize(ray.d), si);
-                    L += beta * Le * PowerHeuristic(1, p_b, 1, p_l);
+                    L += beta * Le * PowerHeuristic(1, misPdf(), 1, p_l);
                 }
             }
         }
@@ -126,10 +137,15 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
 
         // Continue the path in a BSDF-sampled direction.
         Float uc = sampler.Get1D();
-        std::optional<BSDFSample> bs = bsdf->Sample_f(si.wo, uc, sampler.Get2D());
+        std::optional<BSDFSample> bs = bsdf->Sample_f(si.wo, uc, sampler.Get2D(), /*exactPdf=*/false);
         if (!bs) break;
         beta *= bs->f * (AbsDot(bs->wi, si.ns) / bs->pdf);
         p_b = bs->pdf;
+        pdfBsdf.reset();
+        if (bs->pdfIsProportional) {
+            pdfBsdf = std::move(bsdf);
+            pdfSample = *bs;
+        }
         specularBounce = bs->specular;
         if (bs->transmission) etaScale *= Sqr(bs->eta);
         prevCtx = LightSampleContext{si.p, si.n, si.pError};
