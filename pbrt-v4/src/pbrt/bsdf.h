@@ -25,6 +25,8 @@ class BSDF {
     }
     bool IsBlack() const { return std::visit([](auto &b) { return b.IsBlack(); }, bxdf); }
     bool IsNonSpecular() const { return std::visit([](auto &b) { return !b.IsSpecular(); }, bxdf); }
+    // f and PDF are stochastic estimates costing many evaluations (the coated layer).
+    bool HasCostlyF() const { return std::holds_alternative<CoatedDiffuseBxDF>(bxdf); }
 
     SampledSpectrum f(const Vector3f &woW, const Vector3f &wiW) const {
         Vector3f wo = frame.ToLocal(woW), wi = frame.ToLocal(wiW);

@@ -44,9 +44,15 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
     std::optional<LightLiSample> ls = light.SampleLi(ctx, u, lambda, &spectra);
     if (!ls || !ls->L.IsNonZero() || ls->pdf == 0) return SampledSpectrum(0);
 
+    // A shadow ray costs less than the coated layer's f (a random walk): test visibility
+    // first there, and f first for the others, whose f is cheap and often 0 (light behind
+    // the surface). Either order gives the same value.
+    const bool costlyF = bsdf.HasCostlyF();
+    if (costlyF && !scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)))
+        return SampledSpectrum(0);
     SampledSpectrum f = bsdf.f(si.wo, ls->wi) * AbsDot(ls->wi, si.ns);
     if (!f.IsNonZero()) return SampledSpectrum(0);
-    if (!scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)))
+    if (!costlyF && !scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)))
         return SampledSpectrum(0);
 
     Float p_l = pmf * ls->pdf;
