@@ -27,6 +27,11 @@ class BSDF {
     bool IsNonSpecular() const { return std::visit([](auto &b) { return !b.IsSpecular(); }, bxdf); }
     // f and PDF are stochastic estimates costing many evaluations (the coated layer).
     bool HasCostlyF() const { return std::holds_alternative<CoatedDiffuseBxDF>(bxdf); }
+    // wo and wi on the same side of the shading surface, as f sees them (a reflection-only
+    // BxDF's f is 0 otherwise).
+    bool SameSide(const Vector3f &woW, const Vector3f &wiW) const {
+        return SameHemisphere(frame.ToLocal(woW), frame.ToLocal(wiW));
+    }
 
     SampledSpectrum f(const Vector3f &woW, const Vector3f &wiW) const {
         Vector3f wo = frame.ToLocal(woW), wi = frame.ToLocal(wiW);

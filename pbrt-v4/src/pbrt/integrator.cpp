@@ -48,7 +48,8 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
     // first there, and f first for the others, whose f is cheap and often 0 (light behind
     // the surface). Either order gives the same value.
     const bool costlyF = bsdf.HasCostlyF();
-    if (costlyF && !scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)))
+    if (costlyF && (!bsdf.SameSide(si.wo, ls->wi) ||  // f = 0: the layer only reflects
+                    !scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError))))
         return SampledSpectrum(0);
     SampledSpectrum f = bsdf.f(si.wo, ls->wi) * AbsDot(ls->wi, si.ns);
     if (!f.IsNonZero()) return SampledSpectrum(0);
