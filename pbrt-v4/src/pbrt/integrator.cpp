@@ -75,12 +75,17 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
     // walk estimates it at some cost): only a hit on an emitter needs it, for MIS.
     std::optional<BSDF> pdfBsdf;
     BSDFSample pdfSample;
-    auto misPdf = [&]() {
+    // The MIS weight of an emitter hit whose light-sampling density is p_l. With p_l = 0
+    // (a light next-event estimation never picks) it is 1 whatever p_b is, as long as p_b > 0,
+    // which holds for a deferred PDF (the layer's PDF has a uniform share), so the estimate
+    // is skipped there.
+    auto misWeight = [&](Float p_l) {
         if (pdfBsdf) {
+            if (p_l == 0) return Float(1);
             p_b = pdfBsdf->DeferredPDF(pdfSample);
             pdfBsdf.reset();
         }
-        return p_b;
+        return PowerHeuristic(1, p_b, 1, p_l);
     };
     SurfaceInteraction si;
     SampledSpectrumCache spectra;  // emitters' and conductors' spectra at lambda (cleared when it changes)
@@ -96,7 +101,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                     L += beta * Le;
                 } else {
                     Float p_l = scene.lightSampler.PMF(li) * light.PDF_Li(prevCtx, ray.d, si);
-                    L += beta * Le * PowerHeuristic(1, misPdf(), 1, p_l);
+                    L += beta * Le * misWeight(p_l);
                 }
             }
             break;
@@ -112,7 +117,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                 } else {
                     Float p_l = scene.lightSampler.PMF(si.areaLight) *
                                 light.PDF_Li(prevCtx, Normalize(ray.d), si);
-                    L += beta * Le * PowerHeuristic(1, misPdf(), 1, p_l);
+                    L += beta * Le * misWeight(p_l);
                 }
             }
         }
