@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace pbrt {
 
@@ -102,6 +104,30 @@ SpectrumHandle FastLookup(SpectrumHandle s) {
     if (auto pl = std::dynamic_pointer_cast<const PiecewiseLinearSpectrum>(s))
         return std::make_shared<IndexedPiecewiseLinearSpectrum>(*pl);
     return s;
+}
+
+void Light::ShareEqualSpectra(std::vector<Light> &lights) {
+    // Candidates by node count and end points; equal tables are then compared in full.
+    std::map<std::tuple<size_t, Float, Float>, std::vector<SpectrumHandle>> seen;
+    const Spectrum *lastIn = nullptr;
+    SpectrumHandle lastOut;
+    for (Light &l : lights) {
+        if (l.spectrum.get() == lastIn) {  // the lights of one shape share their spectrum
+            l.spectrum = lastOut;
+            continue;
+        }
+        lastIn = l.spectrum.get();
+        if (auto *a = dynamic_cast<const IndexedPiecewiseLinearSpectrum *>(lastIn)) {
+            auto &same = seen[{a->Lambdas().size(), a->Lambdas().front(), a->Lambdas().back()}];
+            auto it = std::find_if(same.begin(), same.end(), [&](const SpectrumHandle &h) {
+                auto *b = static_cast<const IndexedPiecewiseLinearSpectrum *>(h.get());
+                return b->Lambdas() == a->Lambdas() && b->Values() == a->Values();
+            });
+            if (it != same.end()) l.spectrum = *it;
+            else same.push_back(l.spectrum);
+        }
+        lastOut = l.spectrum;
+    }
 }
 
 void Light::Preprocess(const Bounds3f &b) {

@@ -102,6 +102,11 @@ class Light {
     static void CreateArea(const ParameterDictionary &params, SpectrumHandle spectrum,
                            const RGBColorSpace &cs, std::shared_ptr<const TriangleMesh> mesh,
                            const Sphere *sphere, const FileLoc &loc, std::vector<Light> *out);
+    // Makes lights whose tabulated spectra have the same nodes and values share one
+    // spectrum object: a path's spectrum cache (keyed by object) then evaluates it once for
+    // all of them. Scenes often give every lamp its own copy of one table. The values are
+    // unchanged.
+    static void ShareEqualSpectra(std::vector<Light> &lights);
 
   private:
     LightType type = LightType::Point;
@@ -137,8 +142,9 @@ class IndexedPiecewiseLinearSpectrum : public Spectrum {
     SampledSpectrum Sample(const SampledWavelengths &lambda) const override;
     Float MaxValue() const override;
     std::string ToString() const override;
-    // The nodes (between them the spectrum is linear).
+    // The nodes (between them the spectrum is linear) and the values there.
     const std::vector<Float> &Lambdas() const { return lambdas; }
+    const std::vector<Float> &Values() const { return values; }
 
   private:
     std::vector<Float> lambdas, values;

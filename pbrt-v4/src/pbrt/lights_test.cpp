@@ -5,6 +5,8 @@
 #include <pbrt/lights.h>
 
 #include <pbrt/test_util.h>
+#include <pbrt/util/color.h>
+#include <pbrt/util/paramdict.h>
 #include <pbrt/util/rng.h>
 
 #include <gtest/gtest.h>
@@ -177,4 +179,31 @@ TEST(Lights, AreaLightPointMatchesTheSurfaceInteraction) {
             }
         }
     }
+}
+
+TEST(Lights, EqualTabulatedSpectraAreShared) {
+    // Lights given the same table each (as scene files repeat a lamp per light) share one
+    // spectrum object afterwards, so that a path's spectrum cache evaluates it once; other
+    // tables and other kinds of spectra keep theirs.
+    auto table = [](Float scale) {
+        std::vector<Float> v;
+        for (int i = 0; i < 50; ++i) v.insert(v.end(), {400 + 2.5f * i, scale * (1 + std::sin(0.3f * i))});
+        return FastLookup(PiecewiseLinearSpectrum::FromInterleaved(v, false));
+    };
+    auto point = [](SpectrumHandle spec) {
+        return Light::Create("point", ParameterDictionary(), Transform(), std::move(spec), *RGBColorSpace::sRGB, FileLoc{});
+    };
+    std::vector<Light> lights = {point(table(1)), point(table(1)) /* equal to 0, another object */,
+                                 point(table(2)) /* other values */,
+                                 point(std::make_shared<ConstantSpectrum>(1.f)), point(table(1))};
+    ASSERT_NE(lights[0].EmissionSpectrum(), lights[1].EmissionSpectrum());
+    SampledWavelengths lambda = SampledWavelengths::SampleUniform(0.3f);
+    SampledSpectrum before = lights[4].EmissionSpectrum()->Sample(lambda);
+    Light::ShareEqualSpectra(lights);
+    EXPECT_EQ(lights[1].EmissionSpectrum(), lights[0].EmissionSpectrum());
+    EXPECT_EQ(lights[4].EmissionSpectrum(), lights[0].EmissionSpectrum());
+    EXPECT_NE(lights[2].EmissionSpectrum(), lights[0].EmissionSpectrum());
+    EXPECT_TRUE(dynamic_cast<const ConstantSpectrum *>(lights[3].EmissionSpectrum().get()));
+    SampledSpectrum after = lights[4].EmissionSpectrum()->Sample(lambda);
+    for (int i = 0; i < NSpectrumSamples; ++i) EXPECT_EQ(after[i], before[i]);
 }

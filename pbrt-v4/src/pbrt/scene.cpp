@@ -704,6 +704,7 @@ void SceneBuilder::EndOfFiles() {
     else throw PbrtError("unknown wavelength sampling \"" + opts.wavelengthSampling + "\"");
 
     // Lights that need the scene bounds, and the light sampler.
+    Light::ShareEqualSpectra(scene->lights);
     for (Light &l : scene->lights) l.Preprocess(scene->accel->Bounds());
     scene->lightSampler = LightSampler(scene->lights);
     if (scene->lights.empty()) Warning("the scene has no lights; the image will be black");
