@@ -98,13 +98,7 @@ class BenchError(RuntimeError):
 
 def bench_copy(scene: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
     """A copy of ``scene`` at 256x256 with maximum depth 5."""
-    edit_scene(scene, None, out, resolution=SIZE)
-    text = out.read_text()
-    text, n = re.subn(r'("integer maxdepth"\s*\[?\s*)\d+', rf"\g<1>{MAXDEPTH}", text)
-    if n == 0:
-        text, n = re.subn(r'(Integrator\s+"[^"]+")', rf'\1 "integer maxdepth" [ {MAXDEPTH} ]', text, count=1)
-    out.write_text(text)
-    return out
+    return edit_scene(scene, None, out, resolution=SIZE, maxdepth=MAXDEPTH)
 
 
 def render_cpu(binary: pathlib.Path, scene: pathlib.Path, spp: int, extra: list[str],

@@ -78,3 +78,16 @@ def test_resolution_scale_applies_to_the_scene_size_or_pbrt_default(tmp_path: Pa
     assert text.count("xresolution") == 1 and text.count("yresolution") == 1
     with pytest.raises(ValueError, match="positive"):
         edit_scene(scene, None, tmp_path / "c.pbrt", resolution=-1.0)
+
+
+def test_maxdepth_replaced_or_added(tmp_path: Path) -> None:
+    scene = tmp_path / "s.pbrt"
+    scene.write_text('Integrator "path" "integer maxdepth" [ 17 ] "bool regularize" false\nWorldBegin\n')
+    text = edit_scene(scene, None, tmp_path / "c.pbrt", maxdepth=5).read_text()
+    assert '"integer maxdepth" [ 5 ]' in text and "17" not in text and '"bool regularize" false' in text
+    scene.write_text('Integrator "bdpt"\nWorldBegin\n')
+    text = edit_scene(scene, None, tmp_path / "c.pbrt", maxdepth=3).read_text()
+    assert 'Integrator "bdpt" "integer maxdepth" [ 3 ]' in text and text.count("maxdepth") == 1
+    # None keeps the scene's own
+    scene.write_text('Integrator "path" "integer maxdepth" [ 17 ]\nWorldBegin\n')
+    assert '"integer maxdepth" [ 17 ]' in edit_scene(scene, None, tmp_path / "c.pbrt").read_text()

@@ -38,15 +38,7 @@ TEST_SEEDS = range(101, 105)
 
 def small_copy(scene: Path, out: Path) -> Path:
     """``scene`` at SIZE x SIZE pixels and maximum depth MAXDEPTH."""
-    import re
-
-    edit_scene(scene, None, out, resolution=(SIZE, SIZE))
-    text = out.read_text()
-    text, n = re.subn(r'("integer maxdepth"\s*\[?\s*)\d+', rf"\g<1>{MAXDEPTH}", text)
-    if n == 0:
-        text = re.sub(r'(Integrator\s+"[^"]+")', rf'\1 "integer maxdepth" [ {MAXDEPTH} ]', text, count=1)
-    out.write_text(text)
-    return out
+    return edit_scene(scene, None, out, resolution=(SIZE, SIZE), maxdepth=MAXDEPTH)
 
 
 def block_means(binary: Path, scene: Path, seeds, tmp: Path) -> np.ndarray:

@@ -62,11 +62,13 @@ def _span(tokens: list[Token]) -> tuple[int, int]:
 
 def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
                lo: float = 380.0, hi: float = 780.0,
-               resolution: tuple[int, int] | float | None = None) -> Path:
+               resolution: tuple[int, int] | float | None = None,
+               maxdepth: int | None = None) -> Path:
     """Write a copy of ``scene`` at ``out`` lit by ``spectrum`` (None: keep the emitters).
 
     ``resolution`` is the film's new (width, height), or a factor applied to the scene's own
     size (pbrt-v4's 1280x720 when it gives none; at least one pixel a side), or None to keep it.
+    ``maxdepth`` replaces the integrator's "maxdepth" (added when it gives none); None keeps it.
 
     Included files are inlined into the copy's folder as edited copies of their own, so that
     emitters and file names inside them are handled the same way.
@@ -78,7 +80,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
     """
     scene, out = Path(scene).resolve(), Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, depth=0)
+    body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, maxdepth, depth=0)
     tmp = out.with_suffix(out.suffix + ".tmp")
     tmp.write_text(body)
     tmp.replace(out)
@@ -86,7 +88,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
 
 
 def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, hi: float,
-               resolution: tuple[int, int] | float | None, depth: int) -> str:
+               resolution: tuple[int, int] | float | None, maxdepth: int | None, depth: int) -> str:
     if depth > 32:
         raise SpectrumError(f"{path}: Include nesting deeper than 32 (a cycle?)")
     try:
@@ -107,7 +109,7 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
             arg = st.items[0]
             child = (here / arg.text).resolve()
             name = f"include-{depth + 1}-{abs(hash(str(child))) % 10**8}.pbrt"
-            (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, depth + 1))
+            (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, maxdepth, depth + 1))
             edits.append((arg.start, arg.end, f'"{outdir / name}"'))
             continue
         if d not in _WITH_PARAMS:
@@ -137,6 +139,8 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
                                             f"{p.values[0].text!r}") from None
                     value = _scaled(pixels, resolution)
                 edits.append((*_span(p.values), str(value)))
+            elif d == "Integrator" and maxdepth is not None and p.name == "maxdepth" and p.values:
+                edits.append((*_span(p.values), str(int(maxdepth))))
             elif p.type == "string" and p.name in _FILE_PARAMS and p.values:
                 absolute(p.values[0])
             elif p.type == "spectrum" and p.values and p.values[0].kind == "str":
@@ -154,6 +158,9 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
                             for axis, name in enumerate(("xresolution", "yresolution")) if name not in given)
             if added:
                 edits.append((anchor, anchor, added))
+        if d == "Integrator" and maxdepth is not None and "maxdepth" not in {p.name for p in st.params}:
+            anchor = st.args[0].end if st.args else st.directive.end
+            edits.append((anchor, anchor, f' "integer maxdepth" [ {int(maxdepth)} ]'))
     for start, end, new in sorted(edits, key=lambda e: e[0], reverse=True):
         text = text[:start] + new + text[end:]
     return text
