@@ -47,14 +47,12 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
     // A shadow ray costs less than the coated layer's f (a random walk): test visibility
     // first there, and f first for the others, whose f is cheap and often 0 (light behind
     // the surface). Either order gives the same value.
+    auto unoccluded = [&] { return scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)); };
     const bool costlyF = bsdf.HasCostlyF();
-    if (costlyF && (!bsdf.SameSide(si.wo, ls->wi) ||  // f = 0: the layer only reflects
-                    !scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError))))
+    if (costlyF && (!bsdf.SameSide(si.wo, ls->wi) || !unoccluded()))  // f = 0 on the other side
         return SampledSpectrum(0);
     SampledSpectrum f = bsdf.f(si.wo, ls->wi) * AbsDot(ls->wi, si.ns);
-    if (!f.IsNonZero()) return SampledSpectrum(0);
-    if (!costlyF && !scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)))
-        return SampledSpectrum(0);
+    if (!f.IsNonZero() || (!costlyF && !unoccluded())) return SampledSpectrum(0);
 
     Float p_l = pmf * ls->pdf;
     if (light.IsDelta()) return ls->L * f / p_l;
