@@ -19,12 +19,17 @@ Three measurements, each printed as figures measured in this run:
   seed-to-seed noise alone predicts. Mitsuba's default
   has a per-path relative standard deviation of 15-60 under a line spectrum, so a 0.5 %
   check takes about 1e8 paths per method.
+- ``--sampler-cost``: the wavelength sampler alone in llvm_ad_spectral, nanoseconds of CPU time
+  per path (4M paths a round, ``dr.sync_thread`` after each, median and fastest of
+  ``--runs`` rounds, the first left out): the table's ``sample_four`` (its wavelengths and
+  the weights 1 / mixture pdf) against Mitsuba's ``sample_rgb_spectrum`` on the four
+  shifted lanes, alternating.
 - ``--direct``: the same comparison on the lamp seen directly (a constant environment), which
   tests the wavelength sampler alone, without light transport, to a few hundredths of a percent.
 
 Usage::
 
-    .venv/bin/python scripts/bench_mitsuba_table.py [--cost] [--error] [--unbiased] [--direct]
+    .venv/bin/python scripts/bench_mitsuba_table.py [--cost] [--error] [--unbiased] [--direct] [--sampler-cost]
         [--spectrum SPD] [--table CSV] [--resolution N] [--spp N] [--runs N]
 """
 from __future__ import annotations
@@ -176,11 +181,55 @@ def direct(spectrum, table: Path, spp: int, runs: int, variant: str = VARIANT) -
     _print_means(means)
 
 
+def sampler_cost(table: Path, runs: int, paths: int = 1 << 22) -> None:
+    """ns of CPU time per path of the table's sampler and of Mitsuba's default, alternating."""
+    from wavelength_pdf.evaluation import render_mitsuba as rm
+    from wavelength_pdf.mitsuba import TableSampler
+    from wavelength_pdf.table import read_table
+
+    mi = rm._import(VARIANT)
+    import drjit as dr
+
+    s = TableSampler(read_table(table), mi)
+    u_host = np.random.default_rng(1).random(paths).astype(np.float32)
+
+    def table_fn(u):
+        lam, pdf = s.sample_four(mi.Float64(u))
+        return sum(mi.Float(x) * mi.Float(dr.select(p > 0, dr.rcp(p), 0.0)) for x, p in zip(lam, pdf))
+
+    def default_fn(u):
+        lanes = [u + 0.25 * j for j in range(4)]  # what the sensor hands its srf: u + j/4, wrapped
+        wl, w = mi.sample_rgb_spectrum(mi.Spectrum(*[x - dr.floor(x) for x in lanes]))
+        return sum(wl[j] * w[j] for j in range(4))
+
+    ns: dict[str, list[float]] = {"table": [], "default": []}
+    u = mi.Float(u_host)
+    for k in range(runs + 1):
+        for name, fn in (("table", table_fn), ("default", default_fn)) if k % 2 == 0 else \
+                (("default", default_fn), ("table", table_fn)):
+            uu = u + 0.0  # a fresh input, so that nothing is reused from the last round
+            dr.eval(uu)
+            dr.sync_thread()
+            start = time.process_time()
+            out = fn(uu)
+            dr.eval(out)
+            dr.sync_thread()
+            if k > 0:  # the first round compiles the kernels
+                ns[name].append((time.process_time() - start) * 1e9 / paths)
+    for name, v in ns.items():
+        print(f"{name:8s} median {statistics.median(v):6.1f} ns per path, fastest {min(v):6.1f} "
+              f"(rounds {', '.join(f'{x:.1f}' for x in v)})")
+    print(f"({table.name}: {s.n} nodes, {s.n_merged} merged CDF values; {paths} paths a round, "
+          f"{runs} rounds, {VARIANT}, CPU time of all threads)")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--cost", action="store_true")
     p.add_argument("--error", action="store_true")
     p.add_argument("--unbiased", action="store_true")
+    p.add_argument("--sampler-cost", action="store_true",
+                   help="the wavelength sampler alone: ns per path, table against Mitsuba's default")
     p.add_argument("--direct", action="store_true",
                    help="the lamp seen directly: the wavelength sampler alone, table against default")
     p.add_argument("--spectrum", default=str(TRIBAND))
@@ -199,7 +248,7 @@ def main(argv=None) -> int:
                    help="first seed of --unbiased (seeds SEED, SEED+1, ...; another value gives an independent run)")
     p.add_argument("-o", "--outdir", type=Path, default=REPO / "out" / "bench-mitsuba")
     args = p.parse_args(argv)
-    if not (args.cost or args.error or args.unbiased or args.direct):
+    if not (args.cost or args.error or args.unbiased or args.direct or args.sampler_cost):
         args.cost = True
     import wavelength_pdf.mitsuba  # noqa: F401  (DRJIT_LIBLLVM_PATH before the llvm backend starts)
     from wavelength_pdf.spectra import load_spectrum
@@ -215,6 +264,8 @@ def main(argv=None) -> int:
     if args.unbiased:
         unbiased(spectrum, args.table, args.resolution or 16, args.spp or 4096, args.runs or 16, args.outdir,
                  args.sampler, args.table_runs, args.variant, args.seed)
+    if args.sampler_cost:
+        sampler_cost(args.table, args.runs or 7)
     if args.direct:
         direct(spectrum, args.table, args.spp or 1024, args.runs or 100, args.variant)
     return 0

@@ -101,14 +101,18 @@ def _spiky_table(rng) -> Table:
 
 
 @pytest.mark.parametrize("name", VARIANTS)
-def test_merged_search_equals_four_searches(name):
+@pytest.mark.parametrize("bins", [1, 8, 1 << 16])
+def test_merged_search_equals_four_searches(name, bins):
     """One search over the union of the CDFs' node values (module docstring) finds each
     density's segment exactly as its own search would: the largest i in [0, M-2] with
     F_k[i] <= u, then no later than the last segment with mass; at every node value, the
-    floats beside it, random u, and u outside [0, 1]."""
+    floats beside it, the guide's bin edges, random u, and u outside [0, 1]; with one guide
+    bin (the whole search in the loop), a few, and the default."""
     _, m = variant(name)
     t = _spiky_table(np.random.default_rng(11))
-    s = TableSampler(t, m)
+    s = TableSampler(t, m, guide_bins=bins)
+    if bins != 1 << 16 and not s.jit:
+        pytest.skip("the scalar variant does not use the guide")
     Fs, lasts = [], []
     for p in t.pdfs:
         seg = 0.5 * (p[1:] + p[:-1]) * np.diff(t.grid)
@@ -116,8 +120,9 @@ def test_merged_search_equals_four_searches(name):
         Fs.append(np.minimum(cum / cum[-1], 1.0))
         lasts.append(int(np.nonzero(p[1:] + p[:-1] > 0)[0][-1]))
     nodes = np.concatenate(Fs)
-    u = np.concatenate([nodes, np.nextafter(nodes, 2.0), np.nextafter(nodes, -1.0),
-                        np.random.default_rng(12).random(2000), [-0.25, 0.0, 1.0, 1.5]])
+    edges = np.arange(bins + 1) / bins
+    u = np.concatenate([nodes, np.nextafter(nodes, 2.0), np.nextafter(nodes, -1.0), edges,
+                        np.nextafter(edges, -1.0), np.random.default_rng(12).random(2000), [-0.25, 0.0, 1.0, 1.5]])
     if not s.jit:
         u = u[::7]  # one Python call per value
     assert s.n_merged < 4 * (t.grid.size - 1)  # the shared CDF values merged
@@ -129,3 +134,10 @@ def test_merged_search_equals_four_searches(name):
         # and sample_four's wavelengths lie in those segments
         lam = run(s, m, lambda x, k=k: s.sample_four(x)[0][k], u)
         assert np.all((lam >= t.grid[want]) & (lam <= t.grid[want + 1]))
+
+
+@pytest.mark.parametrize("bins", [0, 3, 1 << 25, 2.0])
+def test_guide_bins_must_be_a_power_of_two(bins):
+    _, m = variant(VARIANTS[0])
+    with pytest.raises(ValueError, match="power of two"):
+        TableSampler(_spiky_table(np.random.default_rng(1)), m, guide_bins=bins)

@@ -12,12 +12,18 @@ variants the same formulas run on Python floats, per call.
 
 The four densities share one u, so one search finds all four segments: the union of the four
 CDFs' node values, sorted, cuts [0, 1] into intervals in each of which every density's segment
-is fixed, and a table holds those four segments per interval. One binary search over at most
-4 (M - 1) values (Mitsuba's ``math.find_interval``, branch-free, log2 gathers) and one 4-wide
-gather replace four searches over M nodes each; the segments are exactly the per-density
-searches' (largest i with F_k[i] <= u, then the last segment with mass), because a node value
-<= u is a member of the union <= u. With a 321-node table the sampler went from 52 to 34 ns
-per path (patches/README.md). Mitsuba's own
+is fixed, and a table holds those four segments per interval; the segments are exactly the
+per-density searches' (largest i with F_k[i] <= u, then the last segment with mass), because
+a node value <= u is a member of the union <= u. The search itself starts from a guide table
+over u (K equal bins, K = 2^16 by default: the first and last interval of each bin), so that
+most lanes are done after two gathers, and finishes with a binary search between those two
+in a Dr.Jit loop, which runs only as long as the packet's widest bin needs (log2 of its
+interval count; the lines of a spiky lamp put a few hundred tiny-mass intervals into one
+bin). Each density's segment then comes as one 8-value record (one packet gather) holding
+what the inversion needs, with the slope precomputed: one division and one square root per
+lane. With a 321-node table the sampler went from 52 ns per path (four searches) to 34 ns
+(one merged binary search) to about 20 ns (guide table and records; patches/README.md).
+Mitsuba's own
 ``IrregularContinuousDistribution`` would do the search too, but its float32 inversion
 subtracts nearly equal numbers on steep segments and cannot reproduce the reference on a
 0.05 nm spike to 1e-5, so the inversion is written here (in double precision, as the header
@@ -67,11 +73,16 @@ class TableSampler:
         ``UInt32`` are the array types of the computation.
     defensive : float
         Share S of the uniform density mixed into every p_k (design §1); 0 keeps the table.
+    guide_bins : int
+        K, the guide table's bins over u (module docstring): a power of two, so that u K and
+        b / K are exact; any such K gives the same segments, a larger K fewer search steps.
     """
 
-    def __init__(self, table: Table, module, defensive: float = 0.0):
+    def __init__(self, table: Table, module, defensive: float = 0.0, guide_bins: int = 1 << 16):
         if defensive:
             table = defensive_mixture(table, defensive)
+        if not (isinstance(guide_bins, int) and 1 <= guide_bins <= 1 << 24 and guide_bins & (guide_bins - 1) == 0):
+            raise ValueError(f"guide_bins must be a power of two in [1, 2^24], got {guide_bins!r}")
         self.table = table
         self.m = module
         self.jit = dr.is_jit_v(module.Float)
@@ -83,6 +94,7 @@ class TableSampler:
         # The mixture at the nodes: linear interpolation commutes with the mean, so the mixture
         # inside a segment is one interpolation (2 gathers a lane instead of 8).
         mix = np.mean([pn for pn, _, _ in parts], axis=0)
+        h = np.diff(grid)
         # The merged search (module docstring): sorted distinct node values of the four CDFs
         # (the last node, F = 1, starts no segment) and each interval's four segments.
         keys = [F[:-1] for _, F, _ in parts]
@@ -90,16 +102,35 @@ class TableSampler:
         segs = np.stack([np.searchsorted(K, merged, side="right") - 1 for K in keys], axis=1)
         segs = np.minimum(segs, np.asarray(self.last)[None, :]).astype(np.uint32)
         self.n_merged = int(merged.size)
+        # Guide: the interval holding u = b / K for b = 0..K (0 when u is below every key). An
+        # interval index of u in [b/K, (b+1)/K) lies between guide[b] and guide[b+1].
+        self.guide_bins = guide_bins
+        guide = np.maximum(np.searchsorted(merged, np.arange(guide_bins + 1) / guide_bins, side="right") - 1, 0)
+        # Each density's segment record: left node x0, width h, the density A at the end the
+        # root is taken from (the smaller one), 2 x the slope seen from that end, the CDF Fb
+        # there, the direction sigma (+1 from the left, -1 from the right), the mixture at the
+        # left node and its slope. The root t' >= 0 of (SG2 / 4) t'^2 + A t' = sigma (u - Fb)
+        # is then one division and one square root, and t = t' (left) or h - t' (right).
+        records = []
+        for pn, F, _ in parts:
+            p0, p1 = pn[:-1], pn[1:]
+            slope = (p1 - p0) / h
+            right = p1 < p0
+            records.append(np.stack([grid[:-1], h, np.where(right, p1, p0), 2.0 * np.where(right, -slope, slope),
+                                     np.where(right, F[1:], F[:-1]), np.where(right, -1.0, 1.0),
+                                     mix[:-1], (mix[1:] - mix[:-1]) / h], axis=1))
         if self.jit:
             F64 = module.Float64
             self._grid = F64(grid)
             self._pn = [F64(pn) for pn, _, _ in parts]
             self._F = [F64(F) for _, F, _ in parts]
             self._mix = F64(mix)
-            # +inf closes the last interval: find_interval then returns up to n_merged - 1.
+            # +inf closes the last interval.
             self._merged = F64(np.append(merged, np.inf))
             self._segs = module.UInt32(segs.ravel())
-            dr.eval(self._grid, self._pn, self._F, self._mix, self._merged, self._segs)
+            self._guide = module.UInt32(guide.astype(np.uint32))
+            self._records = [F64(r.ravel()) for r in records]
+            dr.eval(self._grid, self._pn, self._F, self._mix, self._merged, self._segs, self._guide, self._records)
         else:
             self._grid = [float(v) for v in grid]
             self._pn = [[float(v) for v in pn] for pn, _, _ in parts]
@@ -107,6 +138,7 @@ class TableSampler:
             self._mix = [float(v) for v in mix]
             self._merged = [float(v) for v in merged]
             self._segs = [[int(v) for v in row] for row in segs]
+            self._records = [[tuple(float(v) for v in row) for row in r] for r in records]
 
     # --- elementary operations: Dr.Jit arrays (jit) or Python floats (scalar) ------------
 
@@ -125,70 +157,62 @@ class TableSampler:
     def _clip(self, x, lo, hi):
         return dr.clip(x, lo, hi) if self.jit else min(max(x, lo), hi)
 
-    def _stable_root(self, a, s, r):
-        """The root t >= 0 of s t^2 / 2 + a t = r (a, r >= 0), as 2 r / (a + sqrt(a^2 + 2 s r))."""
-        disc = a * a + 2.0 * s * r
-        if self.jit:
-            den = a + dr.sqrt(dr.maximum(disc, 0.0))
-            return dr.select(den > 0, 2.0 * r / dr.select(den > 0, den, 1.0), 0.0)
-        den = a + math.sqrt(max(disc, 0.0))
-        return 2.0 * r / den if den > 0 else 0.0
-
     # --- sample / pdf / invert ----------------------------------------------------------
 
     def sample_segment(self, k: int, u):
         """Segment i and offset t [nm] of lambda = F_k^-1(u); u in [0, 1] (Float64)."""
-        i, t, _, _ = self._segment(k, u)
-        return i, t
+        u = self._clip(u, 0.0, 1.0)
+        i = self._four_segments(u)[k]
+        return i, self._solve(k, i, u)[0]
 
     def _four_segments(self, u):
         """The segments of F_k^-1(u) for k = 0..3 from one merged search; u in [0, 1]."""
-        if self.jit:
-            q = self.m.math.find_interval(self.n_merged + 1,
-                                          lambda idx: dr.gather(self.m.Float64, self._merged, idx) <= u)
-            segs = dr.gather(self.m.ArrayXu, self._segs, q, shape=(N_DENSITIES, dr.width(q)))
-            return [segs[k] for k in range(N_DENSITIES)]
-        return self._segs[max(bisect.bisect_right(self._merged, u) - 1, 0)]
+        if not self.jit:
+            return self._segs[max(bisect.bisect_right(self._merged, u) - 1, 0)]
+        m = self.m
+        b = dr.minimum(m.UInt32(u * self.guide_bins), self.guide_bins - 1)  # exact: K is a power of two
+        lo, hi = dr.gather(m.UInt32, self._guide, b), dr.gather(m.UInt32, self._guide, b + 1)
 
-    def _segment(self, k: int, u, i=None):
-        """Segment i, offset t, left node x0 and width h of lambda = F_k^-1(u) (i: the
-        segment, when ``_four_segments`` found it)."""
-        u = self._clip(u, 0.0, 1.0)
-        F, pn = self._F[k], self._pn[k]
-        if i is None:
-            i = self._four_segments(u)[k]
-        x0, x1 = self._at(self._grid, i), self._at(self._grid, i + 1)
-        p0, p1 = self._at(pn, i), self._at(pn, i + 1)
-        F0, F1 = self._at(F, i), self._at(F, i + 1)
-        h = x1 - x0
-        s = (p1 - p0) / h
-        # From the end where the density is smaller: the left root, or h minus the right one.
-        right = p1 < p0
-        r = self._select(right, F1 - u, u - F0)
-        root = self._stable_root(self._select(right, p1, p0), self._select(right, -s, s),
-                                 dr.maximum(r, 0.0) if self.jit else max(r, 0.0))
-        t = self._select(right, h - root, root)
-        return i, self._clip(t, 0.0, h), x0, h
+        def halve(lo, hi):  # keeps merged[lo] <= u (or lo = 0) and the answer in [lo, hi]
+            mid = (lo + hi + 1) >> 1
+            below = dr.gather(m.Float64, self._merged, mid) <= u
+            return dr.select(below, mid, lo), dr.select(below, hi, mid - 1)
+
+        q, _ = dr.while_loop(state=(lo, hi), cond=lambda lo, hi: lo < hi, body=halve)
+        segs = dr.gather(m.ArrayXu, self._segs, q, shape=(N_DENSITIES, dr.width(q)))
+        return [segs[k] for k in range(N_DENSITIES)]
+
+    def _solve(self, k: int, i, u):
+        """Offset t in segment i of density k where F_k = u, and the mixture density there;
+        also the segment's left node. The root of the segment's quadratic in the
+        cancellation-free form 2 r / (A + sqrt(A^2 + SG2 r)), r = sigma (u - Fb) >= 0."""
+        if self.jit:
+            rec = dr.gather(self.m.ArrayXf64, self._records[k], i, shape=(8, dr.width(u)))
+            x0, h, A, SG2, Fb, sigma, mix0, mix_slope = (rec[j] for j in range(8))
+            r = dr.maximum(sigma * (u - Fb), 0.0)
+            den = A + dr.sqrt(dr.maximum(A * A + SG2 * r, 0.0))
+            root = dr.select(den > 0, 2.0 * r / dr.select(den > 0, den, 1.0), 0.0)
+            t = dr.clip(dr.select(sigma < 0, h - root, root), 0.0, h)
+        else:
+            x0, h, A, SG2, Fb, sigma, mix0, mix_slope = self._records[k][i]
+            r = max(sigma * (u - Fb), 0.0)
+            den = A + math.sqrt(max(A * A + SG2 * r, 0.0))
+            root = 2.0 * r / den if den > 0 else 0.0
+            t = min(max(h - root if sigma < 0 else root, 0.0), h)
+        return t, mix0 + mix_slope * t, x0
 
     def sample(self, k: int, u):
         """lambda = F_k^-1(u) [nm]."""
         i, t = self.sample_segment(k, u)
         return self._at(self._grid, i) + t
 
-    def _mixture_in_segment(self, i, t, x0=None, h=None):
-        """(1/4) sum_k p_k at offset t of segment i (x0, h: the segment, when known)."""
-        if h is None:
-            x0 = self._at(self._grid, i)
-            h = self._at(self._grid, i + 1) - x0
-        a = self._at(self._mix, i)
-        return a + (self._at(self._mix, i + 1) - a) * (t / h)
-
     def pdf(self, lam):
         """Mixture density (1/4) sum_k p_k(lam) [1/nm]; 0 outside the grid."""
         inside = (lam >= self.lo) & (lam <= self.hi) if self.jit else self.lo <= lam <= self.hi
         lam_c = self._clip(lam, self.lo, self.hi)
         i = self._interval(self._grid, lam_c)
-        value = self._mixture_in_segment(i, lam_c - self._at(self._grid, i))
+        x0, a = self._at(self._grid, i), self._at(self._mix, i)
+        value = a + (self._at(self._mix, i + 1) - a) * ((lam_c - x0) / (self._at(self._grid, i + 1) - x0))
         return self._select(inside, value, 0.0)
 
     def invert(self, k: int, lam):
@@ -216,7 +240,7 @@ class TableSampler:
         segs = self._four_segments(u)
         lam, pdf = [], []
         for k in range(N_DENSITIES):
-            i, t, x0, h = self._segment(k, u, segs[k])
+            t, p, x0 = self._solve(k, segs[k], u)
             lam.append(x0 + t)
-            pdf.append(self._mixture_in_segment(i, t, x0, h))
+            pdf.append(p)
         return lam, pdf
