@@ -5,16 +5,29 @@
 #include <array>
 #include <cmath>
 
+#if defined(__GFNI__) && defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 namespace pbrt {
 
 namespace {
 
 uint32_t ReverseBits32(uint32_t n) {
+#if defined(__GFNI__) && defined(__SSE2__)
+    // With GFNI (a -march=native build on a CPU that has it): one affine transform over GF(2)
+    // reverses the bits of every byte (the matrix whose byte j is 1 << j), a byte swap does
+    // the rest. Four of these per 2D sample, so the sampler's cost drops measurably.
+    __m128i v = _mm_gf2p8affine_epi64_epi8(_mm_cvtsi32_si128(int(n)),
+                                           _mm_set1_epi64x(int64_t(0x8040201008040201ULL)), 0);
+    return __builtin_bswap32(uint32_t(_mm_cvtsi128_si32(v)));
+#else
     n = __builtin_bswap32(n);  // the two byte-level steps in one instruction
     n = ((n & 0x0f0f0f0fu) << 4) | ((n & 0xf0f0f0f0u) >> 4);
     n = ((n & 0x33333333u) << 2) | ((n & 0xccccccccu) >> 2);
     n = ((n & 0x55555555u) << 1) | ((n & 0xaaaaaaaau) >> 1);
     return n;
+#endif
 }
 
 // A hash in which every bit depends only on itself and the bits below it: a random

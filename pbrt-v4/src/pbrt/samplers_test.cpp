@@ -41,6 +41,19 @@ TEST(Sampler, SobolFirstDimensionsAreNets) {
     }
 }
 
+TEST(Sampler, SobolFirstDimensionIsTheBitReversedIndex) {
+    // The radical inverse in base 2, bit by bit (whichever bit reversal the build uses).
+    uint32_t i = 0x12345678u;
+    for (int k = 0; k < 10000; ++k, i = i * 1664525u + 1013904223u) {
+        uint32_t want = 0;
+        for (int b = 0; b < 32; ++b) want |= ((i >> b) & 1u) << (31 - b);
+        ASSERT_EQ(SobolDim0(i), want) << i;
+    }
+    EXPECT_EQ(SobolDim0(0), 0u);
+    EXPECT_EQ(SobolDim0(1), 0x80000000u);
+    EXPECT_EQ(SobolDim0(0xffffffffu), 0xffffffffu);
+}
+
 namespace {
 // Draws the first few dimensions of every sample of one pixel.
 std::vector<std::vector<Float>> Draw(Sampler s, Point2i p, int dims) {
