@@ -68,9 +68,17 @@ void SphereIntersectFunc(const RTCIntersectFunctionNArguments *args) {
     rh->hit.instID[0] = args->context->instID[0];
 }
 
+// The context of every occlusion query: Embree hands it to the callbacks unchanged, so it
+// carries the sphere the query skips (Accelerator::Occluded).
+struct OccludedContext {
+    RTCIntersectContext embree;  // first: Embree's pointer to it is a pointer to this
+    uint32_t skipSphere = 0;
+};
+
 void SphereOccludedFunc(const RTCOccludedFunctionNArguments *args) {
     if (args->N != 1 || !args->valid[0]) return;
     const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
+    if (s->id != 0 && reinterpret_cast<const OccludedContext *>(args->context)->skipSphere == s->id) return;
     RTCRay *r = reinterpret_cast<RTCRay *>(args->ray);
     Point3f o = s->objectFromRender.ApplyPoint(Point3f(r->org_x, r->org_y, r->org_z));
     Vector3f d = s->objectFromRender.ApplyVector(Vector3f(r->dir_x, r->dir_y, r->dir_z));
@@ -292,13 +300,14 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
     return true;
 }
 
-bool Accelerator::Occluded(const Ray &ray) const {
+bool Accelerator::Occluded(const Ray &ray, uint32_t skipSphere) const {
     if (!EmbreeAccepts(ray)) {
         WarnDroppedRay();
         return true;
     }
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+    OccludedContext ctx;
+    rtcInitIntersectContext(&ctx.embree);
+    ctx.skipSphere = skipSphere;
     RTCRay r;
     r.org_x = ray.o.x; r.org_y = ray.o.y; r.org_z = ray.o.z;
     r.dir_x = ray.d.x; r.dir_y = ray.d.y; r.dir_z = ray.d.z;
@@ -308,7 +317,7 @@ bool Accelerator::Occluded(const Ray &ray) const {
     r.mask = 0xffffffffu;
     r.id = 0;
     r.flags = 0;
-    rtcOccluded1(impl->objects[0].scene, &ctx, &r);
+    rtcOccluded1(impl->objects[0].scene, &ctx.embree, &r);
     return r.tfar < 0;
 }
 

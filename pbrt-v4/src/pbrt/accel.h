@@ -37,7 +37,9 @@ class Accelerator {
     // Closest hit with t in (0, ray.tMax); fills si (world space) on a hit.
     bool Intersect(const Ray &ray, SurfaceInteraction *si) const;
     // Whether anything is hit with t in (0, ray.tMax).
-    bool Occluded(const Ray &ray) const;
+    // skipSphere: the id of a sphere (Sphere::id) not to test, one the caller knows the ray
+    // does not cross (a light sample's own sphere); 0 tests every shape.
+    bool Occluded(const Ray &ray, uint32_t skipSphere = 0) const;
     // World-space bounds of everything in the top level.
     Bounds3f Bounds() const { return bounds; }
 

@@ -47,7 +47,8 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
     // A shadow ray costs less than the coated layer's f (a random walk): test visibility
     // first there, and f first for the others, whose f is cheap and often 0 (light behind
     // the surface). Either order gives the same value.
-    auto unoccluded = [&] { return scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError)); };
+    auto unoccluded = [&] { return scene.Unoccluded(si.SpawnRayTo(ls->pLight, ls->nLight, ls->pLightError),
+                                                         ls->unblockingSphere); };
     const bool costlyF = bsdf.HasCostlyF();
     if (costlyF && (!bsdf.SameSide(si.wo, ls->wi) || !unoccluded()))  // f = 0 on the other side
         return SampledSpectrum(0);

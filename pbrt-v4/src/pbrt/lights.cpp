@@ -215,6 +215,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
             Float t = dc * cosTheta - SafeSqrt(Sqr(R) - dc2 * sin2Theta);
             Point3f pObj = sphere->objectFromRender.ApplyPoint(ctx.p + ls.wi * t);
             sphere->SurfacePoint(pObj, &ls.pLight, &ls.pLightError, &ls.nLight);
+            ls.unblockingSphere = sphere->id;
             ls.pdf = 1 / (2 * Pi * oneMinusCosMax);
             ls.L = L(ls.nLight, -ls.wi, lambda, cache);
             if (!ls.L.IsNonZero()) return std::nullopt;

@@ -42,6 +42,9 @@ struct LightLiSample {
     Point3f pLight;    // the sampled point (far away for distant lights)
     Normal3f nLight;   // its normal (zero for point, spot and distant lights)
     Vector3f pLightError;
+    // The id of a sphere whose first point along wi is pLight (cone sampling): the segment to
+    // pLight cannot cross that sphere, so its shadow ray need not test it. 0: test everything.
+    uint32_t unblockingSphere = 0;
 };
 
 class Light {

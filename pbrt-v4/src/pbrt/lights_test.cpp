@@ -207,3 +207,46 @@ TEST(Lights, EqualTabulatedSpectraAreShared) {
     SampledSpectrum after = lights[4].EmissionSpectrum()->Sample(lambda);
     for (int i = 0; i < NSpectrumSamples; ++i) EXPECT_EQ(after[i], before[i]);
 }
+
+TEST(Lights, ShadowRaysSkipOnlyTheSampledSphere) {
+    // A sphere light (radius 1 at z = 3) and a second sphere (radius 0.5 at z = 6, behind it).
+    // Cone samples of the light name its sphere; the shadow ray to such a sample gives the same
+    // answer with and without skipping that sphere (the segment never crosses it), a ray right
+    // through the light is unoccluded only when the light's sphere is skipped, and a ray
+    // through both spheres stays occluded when only the light's is skipped.
+    auto scene = LoadSceneFromString(R"(
+LookAt 0 0 -1  0 0 0  0 1 0
+Camera "orthographic"
+Film "rgb" "integer xresolution" [4] "integer yresolution" [4]
+WorldBegin
+AttributeBegin AreaLightSource "diffuse" Translate 0 0 3 Shape "sphere" "float radius" [1] AttributeEnd
+AttributeBegin Translate 0 0 6 Shape "sphere" "float radius" [0.5] AttributeEnd
+)", RenderOptions{}, "test.pbrt");
+    ASSERT_EQ(scene->lights.size(), 1u);
+    const Light &light = scene->lights[0];
+    SampledWavelengths lambda = SampledWavelengths::SampleVisible(0.3f);
+    SampledSpectrumCache cache;
+    RNG rng(7);
+    uint32_t id = 0;
+    int crossed = 0;
+    for (int i = 0; i < 2000; ++i) {
+        Point3f p(4 * rng.UniformFloat() - 2, 4 * rng.UniformFloat() - 2, -1 + rng.UniformFloat());
+        LightSampleContext ctx{p, Normal3f(0, 0, 0), Vector3f(0, 0, 0)};
+        auto ls = light.SampleLi(ctx, Point2f(rng.UniformFloat(), rng.UniformFloat()), lambda, &cache);
+        if (!ls) continue;
+        ASSERT_NE(ls->unblockingSphere, 0u);
+        if (id == 0) id = ls->unblockingSphere;
+        ASSERT_EQ(ls->unblockingSphere, id);
+        Ray r(p, ls->pLight - p, 1 - 1e-4f);  // as a shadow ray: it stops short of pLight
+        bool all = scene->accel->Occluded(r), skipped = scene->accel->Occluded(r, id);
+        EXPECT_EQ(all, skipped) << i;
+        crossed += all;
+    }
+    EXPECT_LT(crossed, 20);  // self-occlusion by rounding, if any, is rare
+    Ray through(Point3f(0, 0, -1), Vector3f(0, 0, 3.5f), 1);  // ends at z = 2.5, inside the light
+    EXPECT_TRUE(scene->accel->Occluded(through));
+    EXPECT_FALSE(scene->accel->Occluded(through, id));
+    Ray both(Point3f(0, 0, -1), Vector3f(0, 0, 10), 1);  // through the light and the second sphere
+    EXPECT_TRUE(scene->accel->Occluded(both, id));
+    EXPECT_TRUE(scene->accel->Occluded(both, id + 1000));
+}

@@ -16,8 +16,8 @@
 
 namespace pbrt {
 
-bool Scene::Unoccluded(const Ray &ray) const {
-    if (!hasInterfaces) return !accel->Occluded(ray);
+bool Scene::Unoccluded(const Ray &ray, uint32_t skipSphere) const {
+    if (!hasInterfaces) return !accel->Occluded(ray, skipSphere);
     // Walk through "interface" surfaces, which have no substance.
     Point3f target = ray(ray.tMax);
     Ray r = ray;

@@ -46,7 +46,8 @@ struct Scene {
     bool disablePixelJitter = false, disableWavelengthJitter = false;
 
     // Whether nothing opaque lies on the segment of a shadow ray.
-    bool Unoccluded(const Ray &ray) const;
+    // skipSphere: a sphere's id (Sphere::id) the segment is known not to cross, or 0.
+    bool Unoccluded(const Ray &ray, uint32_t skipSphere = 0) const;
 };
 
 // Parses the files (standard input if none) and builds the scene, applying the options.

@@ -4,6 +4,7 @@
 #include <pbrt/util/paramdict.h>
 #include <pbrt/util/ply.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
@@ -180,6 +181,8 @@ Sphere::Sphere(const Transform &renderFromObject, bool reverseOrientation, Float
                Float zmin, Float zmax, Float phiMaxDegrees)
     : renderFromObject(renderFromObject), objectFromRender(Inverse(renderFromObject)),
       radius(radius), reverseOrientation(reverseOrientation) {
+    static std::atomic<uint32_t> nextId{1};
+    id = nextId++;
     zMin = Clamp(std::min(zmin, zmax), -radius, radius);
     zMax = Clamp(std::max(zmin, zmax), -radius, radius);
     thetaZMin = std::acos(Clamp(zMin / radius, -1, 1));

@@ -70,6 +70,9 @@ struct Sphere {
     Float radius = 1, zMin = -1, zMax = 1, thetaZMin = 0, thetaZMax = 0, phiMax = 2 * Pi;
     bool reverseOrientation = false;
     FileLoc loc;  // the Shape statement (for messages)
+    // Which sphere this is (copies keep it): a light's copy and the ray tracer's copy of one
+    // Shape statement have the same id. 0 for default-constructed spheres.
+    uint32_t id = 0;
 
     Sphere() = default;
     Sphere(const Transform &renderFromObject, bool reverseOrientation, Float radius, Float zMin,
