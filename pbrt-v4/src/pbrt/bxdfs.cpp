@@ -183,6 +183,49 @@ std::optional<BSDFSample> DielectricBxDF::Sample_f(const Vector3f &wo, Float uc,
     return MakeSample(SampledSpectrum(ft), wi, pdf, false, true, etap);
 }
 
+std::optional<DielectricBxDF::RatioSample> DielectricBxDF::SampleRatio(const Vector3f &wo, Float uc,
+                                                                       Point2f u, TransportMode mode) const {
+    // Sample_f's steps with all lobes allowed (so pr + pt = R + T = 1), keeping only f / pdf.
+    if (eta == 1 || distrib.EffectivelySmooth()) {
+        Float R = FrDielectric(CosTheta(wo), eta), T = 1 - R;
+        if (uc < R) {
+            Vector3f wi(-wo.x, -wo.y, wo.z);
+            if (!(R > 0) || wi.z == 0) return std::nullopt;
+            return RatioSample{wi, R / (R * AbsCosTheta(wi)), true, false};
+        }
+        Vector3f wi;
+        Float etap;
+        if (!(T > 0) || !Refract(wo, Vector3f(0, 0, 1), eta, &etap, &wi) || wi.z == 0) return std::nullopt;
+        Float ratio = T / (T * AbsCosTheta(wi));
+        if (mode == TransportMode::Radiance) ratio /= Sqr(etap);
+        return RatioSample{wi, ratio, true, true};
+    }
+    if (wo.z == 0) return std::nullopt;
+    Vector3f wm = distrib.Sample_wm(wo, u);
+    Float cosFacing = wo.z > 0 ? Dot(wo, wm) : -Dot(wo, wm);
+    // Sample_f's pdf is 0 where the visible-normal density is (wm facing away from wo).
+    if (!(cosFacing > 0) || !(distrib.D(wm) > 0)) return std::nullopt;
+    Float R = FrDielectric(Dot(wo, wm), eta), T = 1 - R;
+    Float lambdaO = distrib.Lambda(wo);
+    if (uc < R) {
+        Vector3f wi = Reflect(wo, wm);
+        if (!SameHemisphere(wo, wi) || !(R > 0)) return std::nullopt;
+        // f = D G R / (4 |cos wi cos wo|), pdf = G1(wo) D / (4 |cos wo|) R.
+        Float ratio = (1 + lambdaO) / (1 + lambdaO + distrib.Lambda(wi)) / AbsCosTheta(wi);
+        if (!(ratio > 0)) return std::nullopt;
+        return RatioSample{wi, ratio, false, false};
+    }
+    Vector3f wi;
+    Float etap;
+    if (!(T > 0) || !Refract(wo, wm, eta, &etap, &wi)) return std::nullopt;
+    if (SameHemisphere(wo, wi) || wi.z == 0 || Dot(wi, wm) == 0) return std::nullopt;
+    // f = T D G |wi.wm wo.wm| / (|cos wi cos wo| denom), pdf = G1(wo) D |wo.wm| |wi.wm| / (|cos wo| denom) T.
+    Float ratio = (1 + lambdaO) / (1 + lambdaO + distrib.Lambda(wi)) / AbsCosTheta(wi);
+    if (mode == TransportMode::Radiance) ratio /= Sqr(etap);
+    if (!(ratio > 0)) return std::nullopt;
+    return RatioSample{wi, ratio, false, true};
+}
+
 Float DielectricBxDF::PDF(const Vector3f &wo, const Vector3f &wi, TransportMode,
                           BxDFReflTransFlags flags) const {
     if (eta == 1 || distrib.EffectivelySmooth()) return 0;
@@ -358,30 +401,25 @@ std::optional<BSDFSample> CoatedDiffuseBxDF::SampleWalk(Vector3f wo, Float uc, P
     }
 
     // Otherwise follow the refracted direction through the layer until it leaves through
-    // the coat; f and pdf accumulate the product of the events' values and densities.
+    // the coat. Only the walk's weight, the product of the events' f / pdf, is kept: the
+    // sample is returned with pdf 1 (pdfIsProportional; Sample_f replaces it by PDF(wo, wi)
+    // and rescales f), so the coat's events need only their ratios (SampleRatio).
     RNG rng(HashInts({kTagSample, seed, HashVector(wo)}),
             HashInts({FloatBits(uc), FloatBits(u.x), FloatBits(u.y)}));
     auto r = [&rng]() { return rng.UniformFloat(); };
     HGPhaseFunction phase(g);
     Vector3f w = bs->wi;
     bool specularPath = bs->specular;
-    SampledSpectrum f = bs->f * AbsCosTheta(bs->wi);
-    Float pdf = bs->pdf;
+    SampledSpectrum beta = bs->f * (AbsCosTheta(bs->wi) / bs->pdf);
     Float z = thickness;
 
     for (int depth = 0; depth < maxDepth; ++depth) {
-        // Only the ratio f / pdf matters (the caller rescales pdf): keep both in range over
-        // long walks.
-        if (pdf < 1e-8f || pdf > 1e8f) {
-            f /= pdf;
-            pdf = 1;
-        }
-        // Russian roulette on the weight f / pdf; survival divides into the pdf.
-        Float rrBeta = f.MaxComponentValue() / pdf;
+        // Russian roulette on the weight.
+        Float rrBeta = beta.MaxComponentValue();
         if (depth > 3 && rrBeta < 0.25f) {
             Float q = std::max<Float>(0, 1 - rrBeta);
             if (r() < q) return std::nullopt;
-            pdf *= 1 - q;
+            beta /= 1 - q;
         }
         if (w.z == 0) return std::nullopt;
 
@@ -392,8 +430,7 @@ std::optional<BSDFSample> CoatedDiffuseBxDF::SampleWalk(Vector3f wo, Float uc, P
             if (0 < zp && zp < thickness) {
                 std::optional<PhaseFunctionSample> ps = phase.Sample_p(-w, {r(), r()});
                 if (!ps || ps->pdf == 0 || ps->wi.z == 0) return std::nullopt;
-                f *= albedo * ps->p;
-                pdf *= ps->pdf;
+                beta *= albedo * (ps->p / ps->pdf);
                 specularPath = false;
                 w = ps->wi;
                 z = zp;
@@ -402,24 +439,31 @@ std::optional<BSDFSample> CoatedDiffuseBxDF::SampleWalk(Vector3f wo, Float uc, P
             z = Clamp(zp, 0, thickness);
         } else {
             z = (z == thickness) ? 0 : thickness;
-            f *= Tr(thickness, w);
+            beta *= Tr(thickness, w);
         }
 
         // Scatter at the boundary reached (base at z = 0, coat at z = thickness).
         Float uc1 = r();
         Point2f u2{r(), r()};
-        std::optional<BSDFSample> is =
-            (z == 0) ? bottom.Sample_f(-w, uc1, u2) : top.Sample_f(-w, uc1, u2, mode);
-        if (!Valid(is)) return std::nullopt;
-        f *= is->f;
-        pdf *= is->pdf;
+        if (z == 0) {
+            std::optional<BSDFSample> is = bottom.Sample_f(-w, uc1, u2);
+            if (!Valid(is)) return std::nullopt;
+            beta *= is->f * (AbsCosTheta(is->wi) / is->pdf);
+            specularPath &= is->specular;
+            w = is->wi;
+            continue;  // the base reflects
+        }
+        std::optional<DielectricBxDF::RatioSample> is = top.SampleRatio(-w, uc1, u2, mode);
+        if (!is) return std::nullopt;
+        beta *= is->ratio;
         specularPath &= is->specular;
         w = is->wi;
         if (is->transmission) {
             // Left through the coat, on wo's side (the base is opaque): a reflection.
-            return MakeSample(f, flipWi ? -w : w, pdf, specularPath, false);
+            if (!beta.IsNonZero()) return std::nullopt;
+            return MakeSample(beta, flipWi ? -w : w, 1, specularPath, false);
         }
-        f *= AbsCosTheta(is->wi);
+        beta *= AbsCosTheta(is->wi);
     }
     return std::nullopt;
 }

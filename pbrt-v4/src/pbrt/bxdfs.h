@@ -87,6 +87,19 @@ class DielectricBxDF {
     Float PDF(const Vector3f &wo, const Vector3f &wi, TransportMode mode = TransportMode::Radiance,
               BxDFReflTransFlags flags = BxDFReflTransFlags::All) const;
 
+    // Sample_f's direction (the same one for the same numbers, all lobes allowed) with only
+    // the ratio f / pdf, which is all a random walk through a layer needs: the microfacet
+    // density D(wm) cancels from it, leaving (G / G1) F / (P |cos wi|) for a rough surface
+    // (F: the Fresnel reflectance or transmittance, P: the probability of the lobe chosen).
+    // Nothing where Sample_f returns no sample or a zero f or pdf.
+    struct RatioSample {
+        Vector3f wi;
+        Float ratio;  // f / pdf, cosine of wi not included
+        bool specular, transmission;
+    };
+    std::optional<RatioSample> SampleRatio(const Vector3f &wo, Float uc, Point2f u,
+                                           TransportMode mode = TransportMode::Radiance) const;
+
   private:
     Float eta;
     TrowbridgeReitzDistribution distrib;

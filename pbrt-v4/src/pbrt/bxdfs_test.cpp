@@ -626,6 +626,35 @@ TEST(DielectricBxDF, RoughEnergyAtMostOne) {
     }
 }
 
+TEST(DielectricBxDF, SampleRatioIsSampleFsRatio) {
+    // The layered walk's shortcut: the same direction and lobe as Sample_f for the same numbers,
+    // f / pdf to rounding, and nothing exactly where Sample_f gives no usable sample.
+    RNG rng(77);
+    int compared = 0;
+    for (Float eta : {1.5f, 1 / 1.5f, 1.f, 2.4f})
+        for (Float alpha : {0.f, 0.0316f, 0.1f, 0.5f})
+            for (int i = 0; i < 2000; ++i) {
+                DielectricBxDF b(eta, TrowbridgeReitzDistribution(alpha, alpha * (i % 2 ? 1 : 0.6f)));
+                Vector3f wo = SampleUniformSphere({rng.UniformFloat(), rng.UniformFloat()});
+                Float uc = rng.UniformFloat();
+                Point2f u(rng.UniformFloat(), rng.UniformFloat());
+                for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
+                    std::optional<BSDFSample> s = b.Sample_f(wo, uc, u, mode);
+                    std::optional<DielectricBxDF::RatioSample> r = b.SampleRatio(wo, uc, u, mode);
+                    bool usable = s && s->f.IsNonZero() && s->pdf > 0 && s->wi.z != 0;
+                    ASSERT_EQ(usable, r.has_value()) << "eta " << eta << " alpha " << alpha << " i " << i;
+                    if (!usable) continue;
+                    EXPECT_EQ(s->wi, r->wi);
+                    EXPECT_EQ(s->specular, r->specular);
+                    EXPECT_EQ(s->transmission, r->transmission);
+                    Float want = s->f[0] / s->pdf;
+                    EXPECT_NEAR(r->ratio, want, 2e-5f * want) << "eta " << eta << " alpha " << alpha;
+                    ++compared;
+                }
+            }
+    EXPECT_GT(compared, 50000);
+}
+
 TEST(DielectricBxDF, Reciprocity) {
     RNG rng(47);
     for (Float eta : kEtas)
