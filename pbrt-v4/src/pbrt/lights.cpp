@@ -197,7 +197,7 @@ std::optional<LightLiSample> Light::SampleLi(const LightSampleContext &ctx, Poin
         auto b = SampleUniformTriangle(u);
         mesh->SurfacePoint(size_t(triangle), b[1], b[2], &ls.pLight, &ls.pLightError, &ls.nLight);
     } else {
-        Point3f c = sphere->renderFromObject.ApplyPoint(Point3f(0, 0, 0));
+        Point3f c = sphere->center;
         Float R = sphere->radius * sphereScale;
         Float dc2 = DistanceSquared(ctx.p, c);
         if (sphere->IsFull() && dc2 > Sqr(R) * 1.0001f) {
@@ -244,7 +244,7 @@ Float Light::PDF_Li(const LightSampleContext &ctx, const Vector3f &wi,
     if (type == LightType::UniformInfinite) return UniformSpherePDF();
     if (type != LightType::DiffuseArea) return 0;
     if (sphere) {
-        Point3f c = sphere->renderFromObject.ApplyPoint(Point3f(0, 0, 0));
+        Point3f c = sphere->center;
         Float R = sphere->radius * sphereScale;
         Float dc2 = DistanceSquared(ctx.p, c);
         if (sphere->IsFull() && dc2 > Sqr(R) * 1.0001f) {

@@ -183,6 +183,8 @@ Sphere::Sphere(const Transform &renderFromObject, bool reverseOrientation, Float
       radius(radius), reverseOrientation(reverseOrientation) {
     static std::atomic<uint32_t> nextId{1};
     id = nextId++;
+    center = renderFromObject.ApplyPoint(Point3f(0, 0, 0));
+    errorRadius = radius * Length(renderFromObject.ApplyVector(Vector3f(1, 0, 0)));
     zMin = Clamp(std::min(zmin, zmax), -radius, radius);
     zMax = Clamp(std::max(zmin, zmax), -radius, radius);
     thetaZMin = std::acos(Clamp(zMin / radius, -1, 1));
@@ -230,7 +232,7 @@ Point3f Sphere::SurfacePoint(const Point3f &pObjIn, Point3f *p, Vector3f *pError
     *p = renderFromObject.ApplyPoint(pObj);
     *n = Normalize(renderFromObject.ApplyNormal(pObj));
     if (reverseOrientation) *n = -*n;
-    Float rs = radius * Length(renderFromObject.ApplyVector(Vector3f(1, 0, 0)));
+    Float rs = errorRadius;
     *pError = (Abs(*p) + Vector3f(rs, rs, rs)) * kPointErrorScale;
     return pObj;
 }

@@ -73,6 +73,11 @@ struct Sphere {
     // Which sphere this is (copies keep it): a light's copy and the ray tracer's copy of one
     // Shape statement have the same id. 0 for default-constructed spheres.
     uint32_t id = 0;
+    // Derived from the above by the constructor (what every light sample would otherwise
+    // recompute): the centre in render space, and the radius term of SurfacePoint's error
+    // bound, radius |renderFromObject (1, 0, 0)|.
+    Point3f center;
+    Float errorRadius = 1;
 
     Sphere() = default;
     Sphere(const Transform &renderFromObject, bool reverseOrientation, Float radius, Float zMin,
