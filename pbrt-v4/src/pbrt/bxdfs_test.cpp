@@ -342,6 +342,25 @@ TEST(Fresnel, PrincipalSqrtIsLibmsSqrt) {
         }
 }
 
+TEST(Fresnel, SpectralComplexIsThePerWavelengthFormula) {
+    // The four-wavelength version (written for vector registers) against the scalar one, over
+    // metals, dielectric-like and absorbing-dielectric values, at every angle.
+    RNG rng(21);
+    for (int i = 0; i < 20000; ++i) {
+        SampledSpectrum eta, k;
+        for (int j = 0; j < NSpectrumSamples; ++j) {
+            eta[j] = i % 3 == 0 ? 0.05f + 3 * rng.UniformFloat() : 1 + rng.UniformFloat();
+            k[j] = i % 3 == 1 ? 0.f : (i % 3 == 2 ? 0.01f : 8.f) * rng.UniformFloat();
+        }
+        Float cosI = i % 50 == 0 ? Float(i % 100 == 0) : rng.UniformFloat();
+        SampledSpectrum F = FrComplex(cosI, eta, k);
+        for (int j = 0; j < NSpectrumSamples; ++j) {
+            Float want = FrComplex(cosI, std::complex<Float>(eta[j], k[j]));
+            ASSERT_NEAR(F[j], want, 2e-6f * want + 1e-7f) << "eta " << eta[j] << " k " << k[j] << " cos " << cosI;
+        }
+    }
+}
+
 TEST(Fresnel, ComplexReducesToDielectricAndToPerfectMirror) {
     for (Float cosI : {0.02f, 0.2f, 0.6f, 1.0f}) {
         EXPECT_NEAR(FrComplex(cosI, std::complex<Float>(1.5f, 0)), FrDielectric(cosI, 1.5f), 1e-5)

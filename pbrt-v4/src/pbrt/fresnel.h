@@ -90,13 +90,35 @@ inline Float FrComplex(Float cosTheta_i, std::complex<Float> etaF) {
     return Float((rParallel + rPerpendicular) / 2);
 }
 
-// FrComplex at each of the sampled wavelengths (eta and k per wavelength).
+// FrComplex at each of the sampled wavelengths (eta and k per wavelength): the same
+// operations written out on real and imaginary parts, with selects instead of
+// PrincipalSqrt's branches, so that the compiler runs the wavelengths side by side in
+// vector registers (the same values up to rounding; tested against the scalar version).
 inline SampledSpectrum FrComplex(Float cosTheta_i, const SampledSpectrum &eta,
                                  const SampledSpectrum &k) {
-    SampledSpectrum r;
-    for (int i = 0; i < NSpectrumSamples; ++i)
-        r[i] = FrComplex(cosTheta_i, std::complex<Float>(eta[i], k[i]));
-    return r;
+    const double c = Clamp(cosTheta_i, 0, 1), sin2Theta_i = 1 - c * c;
+    double out[NSpectrumSamples];
+#pragma GCC ivdep
+    for (int i = 0; i < NSpectrumSamples; ++i) {
+        double n = eta[i], kk = k[i];
+        double e2r = n * n - kk * kk, e2i = 2 * n * kk;  // eta^2
+        double s = sin2Theta_i / (e2r * e2r + e2i * e2i);
+        double x = 1 - s * e2r, y = s * e2i;  // 1 - sin^2(theta_t) = 1 - sin2 conj(eta^2) / |eta^2|^2
+        // cos(theta_t): the principal square root of x + i y.
+        double r = std::sqrt(x * x + y * y);
+        double t = std::sqrt(0.5 * (r + std::abs(x)));
+        double half = t > 0 ? 0.5 / t : 0;
+        double ctr = x >= 0 ? t : std::abs(y) * half, cti = x >= 0 ? y * half : std::copysign(t, y);
+        if (r == 0) ctr = 0, cti = y;
+        double ecr = n * c, eci = kk * c;                          // eta c
+        double etr = n * ctr - kk * cti, eti = n * cti + kk * ctr;  // eta cos(theta_t)
+        double rPar = (Sqr(ecr - ctr) + Sqr(eci - cti)) / (Sqr(ecr + ctr) + Sqr(eci + cti));
+        double rPerp = (Sqr(c - etr) + Sqr(eti)) / (Sqr(c + etr) + Sqr(eti));
+        out[i] = (rPar + rPerp) / 2;
+    }
+    SampledSpectrum fr;
+    for (int i = 0; i < NSpectrumSamples; ++i) fr[i] = Float(out[i]);
+    return fr;
 }
 
 }  // namespace pbrt
