@@ -206,12 +206,17 @@ std::optional<DielectricBxDF::RatioSample> DielectricBxDF::SampleRatio(const Vec
     // Sample_f's pdf is 0 where the visible-normal density is (wm facing away from wo).
     if (!(cosFacing > 0) || !(distrib.D(wm) > 0)) return std::nullopt;
     Float R = FrDielectric(Dot(wo, wm), eta), T = 1 - R;
+    // G(wo, wi) / (G1(wo) |cos wi|): what is left of f / pdf once D and F / P cancel (F = P
+    // with all lobes allowed).
     Float lambdaO = distrib.Lambda(wo);
+    auto maskingRatio = [&](const Vector3f &wi) {
+        return (1 + lambdaO) / (1 + lambdaO + distrib.Lambda(wi)) / AbsCosTheta(wi);
+    };
     if (uc < R) {
         Vector3f wi = Reflect(wo, wm);
         if (!SameHemisphere(wo, wi) || !(R > 0)) return std::nullopt;
         // f = D G R / (4 |cos wi cos wo|), pdf = G1(wo) D / (4 |cos wo|) R.
-        Float ratio = (1 + lambdaO) / (1 + lambdaO + distrib.Lambda(wi)) / AbsCosTheta(wi);
+        Float ratio = maskingRatio(wi);
         if (!(ratio > 0)) return std::nullopt;
         return RatioSample{wi, ratio, false, false};
     }
@@ -220,7 +225,7 @@ std::optional<DielectricBxDF::RatioSample> DielectricBxDF::SampleRatio(const Vec
     if (!(T > 0) || !Refract(wo, wm, eta, &etap, &wi)) return std::nullopt;
     if (SameHemisphere(wo, wi) || wi.z == 0 || Dot(wi, wm) == 0) return std::nullopt;
     // f = T D G |wi.wm wo.wm| / (|cos wi cos wo| denom), pdf = G1(wo) D |wo.wm| |wi.wm| / (|cos wo| denom) T.
-    Float ratio = (1 + lambdaO) / (1 + lambdaO + distrib.Lambda(wi)) / AbsCosTheta(wi);
+    Float ratio = maskingRatio(wi);
     if (mode == TransportMode::Radiance) ratio /= Sqr(etap);
     if (!(ratio > 0)) return std::nullopt;
     return RatioSample{wi, ratio, false, true};

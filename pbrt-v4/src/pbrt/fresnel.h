@@ -54,15 +54,6 @@ inline Float FrDielectric(Float cosTheta_i, Float eta) {
     return (Sqr(rParallel) + Sqr(rPerpendicular)) / 2;
 }
 
-// Fresnel reflectance of a conductor with complex relative IOR eta = n + i k, for light
-// arriving from the dielectric side (cosTheta_i is clamped to [0, 1]). The same
-// amplitude formulas as the dielectric case, with complex arithmetic; no total internal
-// reflection is possible.
-//
-// Written without complex division (a libgcc call with C99's infinity rules, slow on the
-// hot path): |a / b|^2 = |a|^2 / |b|^2, and s / e for real s is s conj(e) / |e|^2. In
-// double, so that |eta|^4 cannot overflow for any sane eta. The same value as the direct
-// complex formula up to rounding.
 // The principal square root of z, with the textbook formulas (t = sqrt((|x| + |z|) / 2),
 // no cancellation) instead of libm's csqrt, which guards against overflow and infinities a
 // relative IOR cannot produce and costs about four times as much. |z| in double cannot
@@ -76,6 +67,16 @@ inline std::complex<double> PrincipalSqrt(std::complex<double> z) {
     return {std::abs(y) / (2 * t), std::copysign(t, y)};
 }
 
+// Fresnel reflectance of a conductor with complex relative IOR eta = n + i k, for light
+// arriving from the dielectric side (cosTheta_i is clamped to [0, 1]). The same
+// amplitude formulas as the dielectric case, with complex arithmetic; no total internal
+// reflection is possible. The renderer uses the four-wavelength version below; this one,
+// written with std::complex, is the formula that version is tested against.
+//
+// Written without complex division (a libgcc call with C99's infinity rules, slow on the
+// hot path): |a / b|^2 = |a|^2 / |b|^2, and s / e for real s is s conj(e) / |e|^2. In
+// double, so that |eta|^4 cannot overflow for any sane eta. The same value as the direct
+// complex formula up to rounding.
 inline Float FrComplex(Float cosTheta_i, std::complex<Float> etaF) {
     using Complex = std::complex<double>;
     double c = Clamp(cosTheta_i, 0, 1);
