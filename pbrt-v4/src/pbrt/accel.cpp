@@ -1,5 +1,7 @@
 #include <pbrt/accel.h>
 
+#include <pbrt/flat_triangles.h>
+
 #include <embree3/rtcore.h>
 
 #include <cmath>
@@ -38,17 +40,22 @@ struct Instance {
 };
 
 // --- Sphere user-geometry callbacks --------------------------------------------------------
-void SphereBoundsFunc(const RTCBoundsFunctionArguments *args) {
-    const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
-    Bounds3f b = s->renderFromObject.ApplyBounds(s->ObjectBounds());
-    // Pad a little: the bounds must contain every point the intersection test can return.
+// Render-space bounds of a sphere, padded a little: they must contain every point the
+// intersection test can return.
+Bounds3f SphereBounds(const Sphere &s) {
+    Bounds3f b = s.renderFromObject.ApplyBounds(s.ObjectBounds());
     Vector3f pad = (Abs(b.pMin) + Abs(b.pMax)) * 1e-6f;
-    args->bounds_o->lower_x = b.pMin.x - pad.x;
-    args->bounds_o->lower_y = b.pMin.y - pad.y;
-    args->bounds_o->lower_z = b.pMin.z - pad.z;
-    args->bounds_o->upper_x = b.pMax.x + pad.x;
-    args->bounds_o->upper_y = b.pMax.y + pad.y;
-    args->bounds_o->upper_z = b.pMax.z + pad.z;
+    return Bounds3f(b.pMin - pad, b.pMax + pad);
+}
+
+void SphereBoundsFunc(const RTCBoundsFunctionArguments *args) {
+    Bounds3f b = SphereBounds(*static_cast<const Sphere *>(args->geometryUserPtr));
+    args->bounds_o->lower_x = b.pMin.x;
+    args->bounds_o->lower_y = b.pMin.y;
+    args->bounds_o->lower_z = b.pMin.z;
+    args->bounds_o->upper_x = b.pMax.x;
+    args->bounds_o->upper_y = b.pMax.y;
+    args->bounds_o->upper_z = b.pMax.z;
 }
 
 void SphereIntersectFunc(const RTCIntersectFunctionNArguments *args) {
@@ -86,12 +93,51 @@ void SphereOccludedFunc(const RTCOccludedFunctionNArguments *args) {
     if (s->IntersectObject(o, d, r->tfar, &t) && t > r->tnear) r->tfar = -Infinity;
 }
 
+// Where a ray hit, whichever way it was found: Embree's geometry and primitive IDs (the
+// instance's ID, or RTC_INVALID_GEOMETRY_ID), Embree's barycentrics of a triangle, and t.
+struct HitRecord {
+    unsigned geomID, primID, instID;
+    Float u, v, t;
+};
+
+// A sphere of a small scene: tested when the ray crosses its bounds.
+struct FlatSphere {
+    Bounds3f bounds;
+    unsigned geomID;
+};
+
+// Whether the ray o + t d crosses box b for some t in [0, tMax] (conservatively).
+bool CrossesBounds(const Bounds3f &b, const Point3f &o, const Vector3f &d, Float tMax) {
+    Float t0 = 0, t1 = tMax;
+    for (int a = 0; a < 3; ++a) {
+        Float inv = 1 / d[a];
+        Float tn = (b.pMin[a] - o[a]) * inv, tf = (b.pMax[a] - o[a]) * inv;
+        if (tn > tf) std::swap(tn, tf);
+        t0 = std::max(t0, tn);  // NaN (a zero direction on the box's face) is ignored
+        t1 = std::min(t1, tf * (1 + 4e-7f));
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
 }  // namespace
 
 struct Accelerator::Impl {
     RTCDevice device = nullptr;
     std::vector<Object> objects;
     std::vector<Instance> instances;
+    int flatMaxTriangles = 0;
+
+    // A small scene (no instances, at most flatMaxTriangles triangles and a few spheres) is
+    // traced without Embree: every triangle and sphere is tested (flat_triangles.h says why).
+    bool flat = false;
+    FlatTriangles flatTriangles;
+    std::vector<std::pair<unsigned, unsigned>> flatIDs;  // (geomID, primID) per flat triangle
+    std::vector<FlatSphere> flatSpheres;
+
+    void MakeFlat();
+    bool FlatIntersect(const Ray &ray, HitRecord *h) const;
+    bool FlatOccluded(const Ray &ray, uint32_t skipSphere) const;
 
     RTCScene NewScene() {
         RTCScene s = rtcNewScene(device);
@@ -106,7 +152,8 @@ struct Accelerator::Impl {
     }
 };
 
-Accelerator::Accelerator() : impl(new Impl) {
+Accelerator::Accelerator(int flatMaxTriangles) : impl(new Impl) {
+    impl->flatMaxTriangles = flatMaxTriangles;
     impl->device = rtcNewDevice(nullptr);
     if (!impl->device) throw PbrtError("could not create the Embree device");
     rtcSetDeviceErrorFunction(impl->device, EmbreeErrorCallback, nullptr);
@@ -218,6 +265,65 @@ void Accelerator::Commit() {
     bounds = Bounds3f();
     if (b.lower_x <= b.upper_x)
         bounds = Bounds3f(Point3f(b.lower_x, b.lower_y, b.lower_z), Point3f(b.upper_x, b.upper_y, b.upper_z));
+    impl->MakeFlat();
+}
+
+bool Accelerator::TestsEveryShape() const { return impl->flat; }
+
+void Accelerator::Impl::MakeFlat() {
+    const Object &top = objects[0];
+    size_t triangles = 0;
+    for (const Record &r : top.records) {
+        if (r.kind == Record::Kind::Instance) return;
+        if (r.kind == Record::Kind::Mesh) triangles += top.meshes[r.index]->NumTriangles();
+    }
+    // Spheres are tested one by one as well (a bounding-box test, then the exact one).
+    constexpr size_t kMaxSpheres = 8;
+    if (triangles > size_t(flatMaxTriangles) || top.spheres.size() > kMaxSpheres) return;
+    for (unsigned g = 0; g < top.records.size(); ++g) {
+        const Record &r = top.records[g];
+        if (r.kind == Record::Kind::Sphere) {
+            flatSpheres.push_back({SphereBounds(*top.spheres[r.index]), g});
+            continue;
+        }
+        const TriangleMesh &m = *top.meshes[r.index];
+        for (size_t i = 0; i < m.NumTriangles(); ++i) {
+            flatTriangles.Add(m.p[m.indices[3 * i]], m.p[m.indices[3 * i + 1]], m.p[m.indices[3 * i + 2]]);
+            flatIDs.push_back({g, unsigned(i)});
+        }
+    }
+    flat = true;
+}
+
+bool Accelerator::Impl::FlatIntersect(const Ray &ray, HitRecord *h) const {
+    FlatTriangles::Hit th;
+    bool found = flatTriangles.Closest(ray.o, ray.d, ray.tMax, &th);
+    if (found) *h = {flatIDs[th.index].first, flatIDs[th.index].second, RTC_INVALID_GEOMETRY_ID, th.b1, th.b2, th.t};
+    const Object &top = objects[0];
+    for (const FlatSphere &fs : flatSpheres) {
+        Float tMax = found ? h->t : ray.tMax;
+        if (!CrossesBounds(fs.bounds, ray.o, ray.d, tMax)) continue;
+        const Sphere &s = *top.spheres[top.records[fs.geomID].index];
+        Float t;
+        if (s.IntersectObject(s.objectFromRender.ApplyPoint(ray.o), s.objectFromRender.ApplyVector(ray.d), tMax, &t) && t > 0) {
+            *h = {fs.geomID, 0, RTC_INVALID_GEOMETRY_ID, 0, 0, t};
+            found = true;
+        }
+    }
+    return found;
+}
+
+bool Accelerator::Impl::FlatOccluded(const Ray &ray, uint32_t skipSphere) const {
+    if (flatTriangles.Any(ray.o, ray.d, ray.tMax)) return true;
+    const Object &top = objects[0];
+    for (const FlatSphere &fs : flatSpheres) {
+        const Sphere &s = *top.spheres[top.records[fs.geomID].index];
+        if ((s.id != 0 && s.id == skipSphere) || !CrossesBounds(fs.bounds, ray.o, ray.d, ray.tMax)) continue;
+        Float t;
+        if (s.IntersectObject(s.objectFromRender.ApplyPoint(ray.o), s.objectFromRender.ApplyVector(ray.d), ray.tMax, &t) && t > 0)
+            return true;
+    }
+    return false;
 }
 
 namespace {
@@ -242,34 +348,40 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
         WarnDroppedRay();
         return false;
     }
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
-    rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = 0;
-    rh.ray.tfar = ray.tMax;
-    rh.ray.time = 0;
-    rh.ray.mask = 0xffffffffu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl->objects[0].scene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    HitRecord h;
+    if (impl->flat) {
+        if (!impl->FlatIntersect(ray, &h)) return false;
+    } else {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh;
+        rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
+        rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
+        rh.ray.tnear = 0;
+        rh.ray.tfar = ray.tMax;
+        rh.ray.time = 0;
+        rh.ray.mask = 0xffffffffu;
+        rh.ray.id = 0;
+        rh.ray.flags = 0;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(impl->objects[0].scene, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+        h = {rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], rh.hit.u, rh.hit.v, rh.ray.tfar};
+    }
 
     // Find the shape: directly in the top level, or inside an instance.
     const Transform *xf = nullptr;
     const Object *obj = &impl->objects[0];
-    if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
-        const Instance &inst = impl->instances[impl->objects[0].records[rh.hit.instID[0]].index];
+    if (h.instID != RTC_INVALID_GEOMETRY_ID) {
+        const Instance &inst = impl->instances[impl->objects[0].records[h.instID].index];
         xf = &inst.renderFromInstance;
         obj = &impl->objects[inst.object];
     }
-    const Record &rec = obj->records[rh.hit.geomID];
-    Float t = rh.ray.tfar;
+    const Record &rec = obj->records[h.geomID];
+    Float t = h.t;
     if (rec.kind == Record::Kind::Mesh) {
-        obj->meshes[rec.index]->Interaction(rh.hit.primID, rh.hit.u, rh.hit.v, si);
+        obj->meshes[rec.index]->Interaction(h.primID, h.u, h.v, si);
         si->shapeLoc = &obj->meshes[rec.index]->loc;
     } else {
         const Sphere &s = *obj->spheres[rec.index];
@@ -296,7 +408,7 @@ bool Accelerator::Intersect(const Ray &ray, SurfaceInteraction *si) const {
     si->wo = -Normalize(ray.d);
     si->material = rec.material;
     si->areaLight = rec.lightOffset < 0 ? -1
-                    : rec.lightOffset + (rec.kind == Record::Kind::Mesh ? int(rh.hit.primID) : 0);
+                    : rec.lightOffset + (rec.kind == Record::Kind::Mesh ? int(h.primID) : 0);
     return true;
 }
 
@@ -305,6 +417,7 @@ bool Accelerator::Occluded(const Ray &ray, uint32_t skipSphere) const {
         WarnDroppedRay();
         return true;
     }
+    if (impl->flat) return impl->FlatOccluded(ray, skipSphere);
     OccludedContext ctx;
     rtcInitIntersectContext(&ctx.embree);
     ctx.skipSphere = skipSphere;

@@ -1,8 +1,10 @@
 // Ray intersection through Embree 3: every triangle mesh is an Embree triangle geometry,
 // every sphere an Embree user geometry with our own (double precision) intersection test,
 // and each ObjectBegin/ObjectEnd definition an Embree scene instanced by ObjectInstance.
+// Small scenes are traced without Embree, by testing every shape (flat_triangles.h).
 #pragma once
 
+#include <pbrt/flat_triangles.h>
 #include <pbrt/interaction.h>
 #include <pbrt/shapes.h>
 #include <pbrt/util/transform.h>
@@ -14,7 +16,9 @@ namespace pbrt {
 
 class Accelerator {
   public:
-    Accelerator();
+    // Scenes without instances and with at most flatMaxTriangles triangles are traced by
+    // testing every shape (flat_triangles.h); 0 traces every scene through Embree.
+    explicit Accelerator(int flatMaxTriangles = FlatTriangles::kMaxTriangles);
     ~Accelerator();
     Accelerator(const Accelerator &) = delete;
     Accelerator &operator=(const Accelerator &) = delete;
@@ -40,6 +44,8 @@ class Accelerator {
     // skipSphere: the id of a sphere (Sphere::id) not to test, one the caller knows the ray
     // does not cross (a light sample's own sphere); 0 tests every shape.
     bool Occluded(const Ray &ray, uint32_t skipSphere = 0) const;
+    // Whether queries test every shape (a small scene, flat_triangles.h) instead of Embree's.
+    bool TestsEveryShape() const;
     // World-space bounds of everything in the top level.
     Bounds3f Bounds() const { return bounds; }
 
