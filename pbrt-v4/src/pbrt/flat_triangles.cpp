@@ -66,7 +66,7 @@ inline FlatTriangles::Frame FlatTriangles::MakeFrame(const Point3f &o, const Vec
     return f;
 }
 
-inline __attribute__((always_inline)) FlatTriangles::VInt FlatTriangles::Test(const Block &b, const Frame &f, VFloat *tDet, VFloat *absDet) {
+inline __attribute__((always_inline)) FlatTriangles::VInt FlatTriangles::Test(const Block &b, const Frame &f, VFloat *tDet, VFloat *absDet, VFloat *e1Out, VFloat *e2Out) {
     // Named variables, not arrays: arrays of vectors would live in memory.
     VFloat z0 = b.v[0][f.kz] - f.oz, z1 = b.v[1][f.kz] - f.oz, z2 = b.v[2][f.kz] - f.oz;
     VFloat x0 = (b.v[0][f.kx] - f.ox) - f.sx * z0, y0 = (b.v[0][f.ky] - f.oy) - f.sy * z0;
@@ -83,6 +83,10 @@ inline __attribute__((always_inline)) FlatTriangles::VInt FlatTriangles::Test(co
     VInt sign = (VInt)det & INT32_MIN;
     *tDet = (VFloat)((VInt)tScaled ^ sign);
     *absDet = (VFloat)((VInt)det ^ sign);
+    if (e1Out) {
+        *e1Out = (VFloat)((VInt)e1 ^ sign);
+        *e2Out = (VFloat)((VInt)e2 ^ sign);
+    }
     // Written so that NaN (a zero direction, overflow) compares false: no hit. det = 0 fails
     // t > 0 (all three edge functions are then 0, or their signs differ).
     return ~(neg & pos) & (*tDet > 0);
@@ -96,17 +100,20 @@ __attribute__((noinline)) bool FlatTriangles::Closest(const Point3f &o, const Ve
     // Each lane's closest t so far. (Comparing fractions by cross-multiplication instead of
     // dividing would overflow: t det and det grow as the cube and the square of the scene's
     // size.)
-    VFloat best = VFloat{} + tMax;
-    VInt which = VInt{} - 1;
-    VInt lane;
-    for (int i = 0; i < kLanes; ++i) lane[i] = i;
+    // With it, the block it is in and its edge functions of p1 and p2 and determinant (for
+    // the barycentrics).
+    VFloat best = VFloat{} + tMax, bestE1 = {}, bestE2 = {}, bestDet = {};
+    VInt block = {};
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
-        VFloat tDet, absDet;
-        VInt h = Test(blocks[bi], f, &tDet, &absDet);
+        VFloat tDet, absDet, e1, e2;
+        VInt h = Test(blocks[bi], f, &tDet, &absDet, &e1, &e2);
         VFloat t = tDet / absDet;
         h &= t < best;
         best = h ? t : best;
-        which = h ? lane + int32_t(bi * kLanes) : which;
+        bestE1 = h ? e1 : bestE1;
+        bestE2 = h ? e2 : bestE2;
+        bestDet = h ? absDet : bestDet;
+        block = h ? VInt{} + int32_t(bi) : block;
     }
     // The smallest t over the lanes (a lane never hit kept tMax), then the first triangle
     // with it: halving reductions.
@@ -117,25 +124,11 @@ __attribute__((noinline)) bool FlatTriangles::Closest(const Point3f &o, const Ve
     m = Min(m, __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6, 9, 8, 11, 10, 13, 12, 15, 14));
     Float tk = m[0];
     if (!(tk < tMax)) return false;
-    int k = which[FirstLane(best == m)];
-
-    // Barycentrics of the winner, by the same arithmetic in scalar.
-    const Block &b = blocks[k / kLanes];
-    int l = k % kLanes;
-    Float x[3], y[3];
-    for (int v = 0; v < 3; ++v) {
-        Float z = b.v[v][f.kz][l] - f.oz;
-        x[v] = (b.v[v][f.kx][l] - f.ox) - f.sx * z;
-        y[v] = (b.v[v][f.ky][l] - f.oy) - f.sy * z;
-    }
-    Float e0 = x[2] * y[1] - y[2] * x[1];
-    Float e1 = x[0] * y[2] - y[0] * x[2];
-    Float e2 = x[1] * y[0] - y[1] * x[0];
-    Float invDet = 1 / (e0 + e1 + e2);
-    hit->index = k;
+    int l = FirstLane(best == m);
+    hit->index = block[l] * kLanes + l;
     hit->t = tk;
-    hit->b1 = e1 * invDet;
-    hit->b2 = e2 * invDet;
+    hit->b1 = bestE1[l] / bestDet[l];
+    hit->b2 = bestE2[l] / bestDet[l];
     return true;
 }
 
@@ -146,7 +139,7 @@ __attribute__((noinline)) bool FlatTriangles::Any(const Point3f &o, const Vector
     VInt any = VInt{};
     for (const Block &b : blocks) {
         VFloat tDet, absDet;
-        any |= Test(b, f, &tDet, &absDet) & (tDet < tm * absDet);
+        any |= Test(b, f, &tDet, &absDet, nullptr, nullptr) & (tDet < tm * absDet);
     }
     any |= __builtin_shufflevector(any, any, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7);
     any |= __builtin_shufflevector(any, any, 4, 5, 6, 7, 0, 1, 2, 3, 12, 13, 14, 15, 8, 9, 10, 11);

@@ -59,8 +59,9 @@ class FlatTriangles {
     struct Frame;  // a ray in the sheared frame
     static Frame MakeFrame(const Point3f &o, const Vector3f &d);
     // The lanes of block b whose triangle the ray hits with t > 0 (all bits set), and each
-    // lane's t as the fraction tDet / absDet.
-    static VInt Test(const Block &b, const Frame &f, VFloat *tDet, VFloat *absDet);
+    // lane's t as the fraction tDet / absDet; when e1 is not null, the edge functions of p1
+    // and p2, whose ratios to absDet are the barycentrics of p1 and p2.
+    static VInt Test(const Block &b, const Frame &f, VFloat *tDet, VFloat *absDet, VFloat *e1, VFloat *e2);
 
     std::vector<Block> blocks;
     int count = 0;

@@ -20,7 +20,7 @@ namespace {
 // gives one value for all; any other spectrum terminates the secondary wavelengths first
 // (design §1) so that the kept wavelength (now in every slot) decides the refraction. eta 0
 // means 1 (pbrt-v4's convention for "no interface").
-Float SampleEta(const Spectrum &eta, SampledWavelengths &lambda, const std::function<Float()> &uFresh) {
+Float SampleEta(const Spectrum &eta, SampledWavelengths &lambda, FunctionRef<Float()> uFresh) {
     if (!dynamic_cast<const ConstantSpectrum *>(&eta)) lambda.TerminateSecondary(uFresh());
     Float e = eta(lambda[0]);
     return e == 0 ? 1 : e;
@@ -30,7 +30,7 @@ Float SampleEta(const Spectrum &eta, SampledWavelengths &lambda, const std::func
 struct MakeBxDF {
     const TextureEvalContext &ctx;
     SampledWavelengths &lambda;
-    const std::function<Float()> &uFresh;
+    FunctionRef<Float()> uFresh;
     SampledSpectrumCache *spectra;
 
     BxDF operator()(const DiffuseMaterial &d) const {
@@ -83,7 +83,7 @@ const FloatTexture *Displacement(const Material &m) {
 }  // namespace
 
 std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
-                            SampledWavelengths &lambda, const std::function<Float()> &uFresh,
+                            SampledWavelengths &lambda, FunctionRef<Float()> uFresh,
                             SampledSpectrumCache *spectra) {
     if (std::holds_alternative<InterfaceMaterial>(m)) return std::nullopt;
     // Bump mapping first: it changes the shading frame the BSDF lives in.

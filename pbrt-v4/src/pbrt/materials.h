@@ -17,9 +17,9 @@
 #include <pbrt/interaction.h>
 #include <pbrt/microfacet.h>
 #include <pbrt/textures.h>
+#include <pbrt/util/function_ref.h>
 
 #include <cstdint>
-#include <functional>
 #include <optional>
 #include <string>
 #include <variant>
@@ -71,7 +71,7 @@ using Material = std::variant<DiffuseMaterial, InterfaceMaterial, ConductorMater
 // spectra at lambda for the path (a conductor's eta and k), so that they are evaluated once
 // per path; the caller clears it when lambda changes.
 std::optional<BSDF> GetBSDF(const Material &m, const SurfaceInteraction &si,
-                            SampledWavelengths &lambda, const std::function<Float()> &uFresh,
+                            SampledWavelengths &lambda, FunctionRef<Float()> uFresh,
                             SampledSpectrumCache *spectra = nullptr);
 
 // Creates a material of the given type ("string type" of MakeNamedMaterial, or the name

@@ -339,11 +339,6 @@ std::string BlackbodySpectrum::ToString() const {
 
 // ---- RGB spectra -------------------------------------------------------------------------
 
-Float RGBSigmoidPolynomial::operator()(Float lambda) const {
-    Float t = Float((double(lambda) - kCenter) / kHalfWidth);
-    return Sigmoid((c0 * t + c1) * t + c2);
-}
-
 Float RGBSigmoidPolynomial::MaxValue() const {
     // The sigmoid increases, so the maximum is where the quadratic is largest on [-1, 1]:
     // at an end, or at the vertex t = -c1 / (2 c0) when it is a maximum inside.
@@ -379,15 +374,11 @@ RGBAlbedoSpectrum::RGBAlbedoSpectrum(const RGBColorSpace &cs, RGB rgb) {
 }
 
 SampledSpectrum RGBAlbedoSpectrum::Sample(const SampledWavelengths &lambda) const {
-    SampledSpectrum s;
-    for (int i = 0; i < NSpectrumSamples; ++i) s[i] = rsp(lambda[i]);
-    return s;
+    return rsp.Sample(lambda);
 }
 
 SampledSpectrum RGBUnboundedSpectrum::Sample(const SampledWavelengths &lambda) const {
-    SampledSpectrum s;
-    for (int i = 0; i < NSpectrumSamples; ++i) s[i] = scale * rsp(lambda[i]);
-    return s;
+    return rsp.Sample(lambda) * scale;
 }
 
 std::string RGBAlbedoSpectrum::ToString() const {
@@ -411,9 +402,7 @@ RGBIlluminantSpectrum::RGBIlluminantSpectrum(const RGBColorSpace &cs, RGB rgb)
 }
 
 SampledSpectrum RGBIlluminantSpectrum::Sample(const SampledWavelengths &lambda) const {
-    SampledSpectrum s;
-    for (int i = 0; i < NSpectrumSamples; ++i) s[i] = scale * rsp(lambda[i]);
-    return s * illuminant->Sample(lambda);
+    return rsp.Sample(lambda) * scale * illuminant->Sample(lambda);
 }
 
 std::string RGBIlluminantSpectrum::ToString() const {

@@ -43,9 +43,9 @@ class SampledSpectrum {
     Float &operator[](int i) { return values[i]; }
 
     bool IsNonZero() const {
-        for (Float v : values)
-            if (v != 0) return true;
-        return false;
+        bool nonZero = false;  // no early exit: one vector comparison
+        for (Float v : values) nonZero |= v != 0;
+        return nonZero;
     }
     Float MaxComponentValue() const { return *std::max_element(values.begin(), values.end()); }
     Float MinComponentValue() const { return *std::min_element(values.begin(), values.end()); }
@@ -316,12 +316,23 @@ struct RGBSigmoidPolynomial {
     static constexpr double kCenter = 595, kHalfWidth = 235;
     Float c0 = 0, c1 = 0, c2 = 0;  // x = (c0 t + c1) t + c2
 
-    Float operator()(Float lambda) const;
+    Float operator()(Float lambda) const {
+        Float t = Float((double(lambda) - kCenter) / kHalfWidth);
+        return Sigmoid((c0 * t + c1) * t + c2);
+    }
+    // The values at the wavelengths of lambda (the same as operator() at each; written
+    // without branches so that the compiler computes the wavelengths side by side).
+    SampledSpectrum Sample(const SampledWavelengths &lambda) const {
+        SampledSpectrum s;
+        for (int i = 0; i < NSpectrumSamples; ++i) s[i] = (*this)(lambda[i]);
+        return s;
+    }
     Float MaxValue() const;
     static Float Sigmoid(Float x) {
-        // Beyond 1e15 the value is within 1e-30 of its limit (and x * x could overflow).
-        if (std::abs(x) > 1e15f) return x > 0 ? 1 : 0;
-        return 0.5f + x / (2 * std::sqrt(1 + x * x));
+        // Beyond 1e15 the value is within 1e-30 of its limit (and x * x could overflow):
+        // selected after computing both, without a branch.
+        Float s = 0.5f + x / (2 * std::sqrt(1 + x * x));
+        return std::abs(x) > 1e15f ? (x > 0 ? 1 : 0) : s;
     }
 };
 
