@@ -99,7 +99,11 @@ inline SampledSpectrum FrComplex(Float cosTheta_i, const SampledSpectrum &eta,
                                  const SampledSpectrum &k) {
     const double c = Clamp(cosTheta_i, 0, 1), sin2Theta_i = 1 - c * c;
     double out[NSpectrumSamples];
+#if defined(__clang__)
+#pragma clang loop vectorize(assume_safety)
+#elif defined(__GNUC__)
 #pragma GCC ivdep
+#endif
     for (int i = 0; i < NSpectrumSamples; ++i) {
         double n = eta[i], kk = k[i];
         double e2r = n * n - kk * kk, e2i = 2 * n * kk;  // eta^2

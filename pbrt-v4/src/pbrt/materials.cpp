@@ -34,7 +34,11 @@ struct MakeBxDF {
     SampledSpectrumCache *spectra;
 
     BxDF operator()(const DiffuseMaterial &d) const {
-        return DiffuseBxDF(Clamp(d.reflectance->Evaluate(ctx, lambda), Float(0), Float(1)));
+        // A constant reflectance is evaluated once per path (a path meets the same walls
+        // again and again), a texture at every hit.
+        return DiffuseBxDF(Clamp(spectra && d.reflectanceConstant ? spectra->Get(*d.reflectanceConstant, lambda)
+                                                                  : d.reflectance->Evaluate(ctx, lambda),
+                                 Float(0), Float(1)));
     }
     BxDF operator()(const ConductorMaterial &c) const {
         SampledSpectrum eta, k;
@@ -147,7 +151,7 @@ Material CreateMaterial(const std::string &type, const ParameterDictionary &para
     if (type == "diffuse") {
         SpectrumTextureHandle r = textures.spectrum(
             "reflectance", std::make_shared<ConstantSpectrum>(0.5f), SpectrumType::Albedo);
-        return DiffuseMaterial{r, displacement};
+        return DiffuseMaterial{r, displacement, r ? r->Constant() : nullptr};
     }
     if (type == "conductor") {
         ConductorMaterial c;

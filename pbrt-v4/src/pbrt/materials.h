@@ -31,6 +31,7 @@ class ParameterDictionary;
 struct DiffuseMaterial {
     SpectrumTextureHandle reflectance;
     FloatTextureHandle displacement;  // null: no bump mapping
+    SpectrumHandle reflectanceConstant;  // its spectrum when constant (cached per path)
 };
 // Roughness parameters shared by the microfacet materials.
 struct MaterialRoughness {

@@ -5,6 +5,8 @@
 // wavelength leaves the image unbiased); a constant spectral eta renders like the same
 // float eta in a coloured scene; bad parameters are errors; and the six evaluation scenes
 // of ../shared build and render a few pixels.
+#include <pbrt/materials.h>
+#include <pbrt/scene.h>
 #include <pbrt/test_util.h>
 
 #include <gtest/gtest.h>
@@ -215,4 +217,47 @@ TEST(Materials, EvaluationScenesBuildAndRender) {
         ASSERT_EQ(img.width, 4) << file;
         for (float v : img.pixels) EXPECT_TRUE(std::isfinite(v)) << file;
     }
+}
+
+TEST(Materials, ConstantDiffuseReflectanceFromThePathCacheIsTheSame) {
+    // A constant reflectance is taken from the path's spectrum cache (evaluated once per
+    // path); a textured one at each hit. Both give the BSDF the texture gives.
+    auto scene = LoadSceneFromString(R"(
+Camera "perspective"
+WorldBegin
+Material "diffuse" "rgb reflectance" [0.7 0.3 0.05]
+Shape "sphere"
+Texture "checks" "spectrum" "checkerboard" "rgb tex1" [0.8 0.2 0.1] "rgb tex2" [0.1 0.3 0.9]
+Material "diffuse" "texture reflectance" "checks"
+Shape "sphere" "float radius" [2]
+)", RenderOptions{}, "cache.pbrt");
+    ASSERT_GE(scene->materials.size(), 3u);
+    SurfaceInteraction si;
+    si.p = Point3f(0.1f, 0.2f, 0.97f);
+    si.n = si.ns = Normalize(Vector3f(si.p));
+    si.dpdu = Vector3f(1, 0, 0);
+    si.uv = Point2f(0.3f, 0.6f);
+    Vector3f wo = Normalize(Vector3f(0.2f, 0.1f, 1)), wi = Normalize(Vector3f(-0.3f, 0.4f, 1));
+    int constants = 0;
+    for (size_t m = 0; m < scene->materials.size(); ++m) {
+        const auto *d = std::get_if<DiffuseMaterial>(&scene->materials[m]);
+        if (!d) continue;
+        constants += d->reflectanceConstant != nullptr;
+        for (Float u : {0.1f, 0.6f}) {
+            SampledWavelengths lambda = SampledWavelengths::SampleVisible(u);
+            SampledSpectrumCache cache;
+            auto none = [] { return Float(0.5); };
+            std::optional<BSDF> plain = GetBSDF(scene->materials[m], si, lambda, none);
+            std::optional<BSDF> first = GetBSDF(scene->materials[m], si, lambda, none, &cache);
+            std::optional<BSDF> again = GetBSDF(scene->materials[m], si, lambda, none, &cache);
+            ASSERT_TRUE(plain && first && again);
+            SampledSpectrum f = plain->f(wo, wi);
+            ASSERT_TRUE(f.IsNonZero());
+            for (int i = 0; i < NSpectrumSamples; ++i) {
+                EXPECT_EQ(first->f(wo, wi)[i], f[i]) << "material " << m;
+                EXPECT_EQ(again->f(wo, wi)[i], f[i]) << "material " << m;
+            }
+        }
+    }
+    EXPECT_EQ(constants, 2);  // the default material and the rgb one; not the texture
 }

@@ -157,8 +157,8 @@ class SceneBuilder : public ParserTarget {
         scene->accel = std::make_unique<pbrt::Accelerator>();
         graphicsState.colorSpace = RGBColorSpace::sRGB;
         // pbrt-v4's default material: diffuse with reflectance 0.5.
-        scene->materials.push_back(
-            DiffuseMaterial{MakeConstantSpectrumTexture(std::make_shared<ConstantSpectrum>(0.5f)), nullptr});
+        auto half = std::make_shared<ConstantSpectrum>(0.5f);
+        scene->materials.push_back(DiffuseMaterial{MakeConstantSpectrumTexture(half), nullptr, half});
         scene->materialWhere.push_back("default material");
         scene->materialUsed.push_back(0);
         graphicsState.material.index = 0;

@@ -48,14 +48,18 @@ inline Float VisibleWavelengthsPDFFromTanh(double t) {
     return Float(A / (T1() - T0()) * (1 - t * t));
 }
 
-inline Float SampleVisibleWavelengths(Float u) {
+// The wavelength whose tanh(A (lambda - C)) is t, given log((1 + t) / (1 - t)) = 2 atanh(t):
+// atanh as a logarithm is within 3e-16 of std::atanh for |t| <= 0.97 (this range), a
+// fraction of a float's rounding, and half the time of libm's atanh (docs/performance.md).
+inline double VisibleWavelengthsAtanhRatio(double t) { return (1 + t) / (1 - t); }
+inline Float VisibleWavelengthFromLogRatio(double logRatio) {
     using namespace visible_density;
-    double t = VisibleWavelengthsTanh(u);
-    // atanh(t) as log((1 + t) / (1 - t)) / 2: within 3e-16 of std::atanh for |t| <= 0.97
-    // (this range), a fraction of a float's rounding, and half the time of libm's atanh
-    // (docs/performance.md).
-    double lambda = C + 0.5 * std::log((1 + t) / (1 - t)) / A;
+    double lambda = C + 0.5 * logRatio / A;
     return Float(std::clamp(lambda, double(Lambda_min), double(Lambda_max)));
+}
+
+inline Float SampleVisibleWavelengths(Float u) {
+    return VisibleWavelengthFromLogRatio(std::log(VisibleWavelengthsAtanhRatio(VisibleWavelengthsTanh(u))));
 }
 
 inline Float InvertVisibleWavelengthsSample(Float lambda) {
