@@ -288,24 +288,34 @@ void Accelerator::Impl::MakeFlat() {
         }
         const TriangleMesh &m = *top.meshes[r.index];
         for (size_t i = 0; i < m.NumTriangles(); ++i) {
-            flatTriangles.Add(m.p[m.indices[3 * i]], m.p[m.indices[3 * i + 1]], m.p[m.indices[3 * i + 2]]);
+            auto v = m.Vertices(i);
+            flatTriangles.Add(v[0], v[1], v[2]);
             flatIDs.push_back({g, unsigned(i)});
         }
     }
     flat = true;
 }
 
+namespace {
+// The sphere's hit (its exact test) with t in (0, tMax), after a test of its bounds.
+bool HitsFlatSphere(const Sphere &s, const Bounds3f &bounds, const Ray &ray, Float tMax, Float *t) {
+    return CrossesBounds(bounds, ray.o, ray.d, tMax) &&
+           s.IntersectObject(s.objectFromRender.ApplyPoint(ray.o), s.objectFromRender.ApplyVector(ray.d),
+                             tMax, t) &&
+           *t > 0;
+}
+}  // namespace
+
 bool Accelerator::Impl::FlatIntersect(const Ray &ray, HitRecord *h) const {
     FlatTriangles::Hit th;
     bool found = flatTriangles.Closest(ray.o, ray.d, ray.tMax, &th);
-    if (found) *h = {flatIDs[th.index].first, flatIDs[th.index].second, RTC_INVALID_GEOMETRY_ID, th.b1, th.b2, th.t};
+    if (found)
+        *h = {flatIDs[th.index].first, flatIDs[th.index].second, RTC_INVALID_GEOMETRY_ID, th.b1, th.b2, th.t};
     const Object &top = objects[0];
     for (const FlatSphere &fs : flatSpheres) {
-        Float tMax = found ? h->t : ray.tMax;
-        if (!CrossesBounds(fs.bounds, ray.o, ray.d, tMax)) continue;
-        const Sphere &s = *top.spheres[top.records[fs.geomID].index];
         Float t;
-        if (s.IntersectObject(s.objectFromRender.ApplyPoint(ray.o), s.objectFromRender.ApplyVector(ray.d), tMax, &t) && t > 0) {
+        if (HitsFlatSphere(*top.spheres[top.records[fs.geomID].index], fs.bounds, ray,
+                           found ? h->t : ray.tMax, &t)) {
             *h = {fs.geomID, 0, RTC_INVALID_GEOMETRY_ID, 0, 0, t};
             found = true;
         }
@@ -318,10 +328,8 @@ bool Accelerator::Impl::FlatOccluded(const Ray &ray, uint32_t skipSphere) const 
     const Object &top = objects[0];
     for (const FlatSphere &fs : flatSpheres) {
         const Sphere &s = *top.spheres[top.records[fs.geomID].index];
-        if ((s.id != 0 && s.id == skipSphere) || !CrossesBounds(fs.bounds, ray.o, ray.d, ray.tMax)) continue;
         Float t;
-        if (s.IntersectObject(s.objectFromRender.ApplyPoint(ray.o), s.objectFromRender.ApplyVector(ray.d), ray.tMax, &t) && t > 0)
-            return true;
+        if (!(s.id != 0 && s.id == skipSphere) && HitsFlatSphere(s, fs.bounds, ray, ray.tMax, &t)) return true;
     }
     return false;
 }

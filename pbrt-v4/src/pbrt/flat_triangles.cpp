@@ -9,6 +9,8 @@
 
 namespace pbrt {
 
+static_assert(FlatTriangles::kLanes == 16, "the reductions below are written for 16 lanes");
+
 namespace {
 template <typename V>
 inline V Min(V a, V b) {
@@ -66,7 +68,8 @@ inline FlatTriangles::Frame FlatTriangles::MakeFrame(const Point3f &o, const Vec
     return f;
 }
 
-inline __attribute__((always_inline)) FlatTriangles::VInt FlatTriangles::Test(const Block &b, const Frame &f, VFloat *tDet, VFloat *absDet, VFloat *e1Out, VFloat *e2Out) {
+inline __attribute__((always_inline)) FlatTriangles::VInt FlatTriangles::Test(
+    const Block &b, const Frame &f, VFloat *tDet, VFloat *absDet, VFloat *e1Out, VFloat *e2Out) {
     // Named variables, not arrays: arrays of vectors would live in memory.
     VFloat z0 = b.v[0][f.kz] - f.oz, z1 = b.v[1][f.kz] - f.oz, z2 = b.v[2][f.kz] - f.oz;
     VFloat x0 = (b.v[0][f.kx] - f.ox) - f.sx * z0, y0 = (b.v[0][f.ky] - f.oy) - f.sy * z0;
@@ -94,14 +97,14 @@ inline __attribute__((always_inline)) FlatTriangles::VInt FlatTriangles::Test(co
 
 // Not inlined (nor Any): inlined by link-time optimization into a caller compiled with
 // fused multiply-adds, the edge functions would be contracted too (flat_triangles.h).
-__attribute__((noinline)) bool FlatTriangles::Closest(const Point3f &o, const Vector3f &d, Float tMax, Hit *hit) const {
+__attribute__((noinline)) bool FlatTriangles::Closest(const Point3f &o, const Vector3f &d, Float tMax,
+                                                      Hit *hit) const {
     if (blocks.empty()) return false;
     Frame f = MakeFrame(o, d);
-    // Each lane's closest t so far. (Comparing fractions by cross-multiplication instead of
-    // dividing would overflow: t det and det grow as the cube and the square of the scene's
-    // size.)
-    // With it, the block it is in and its edge functions of p1 and p2 and determinant (for
-    // the barycentrics).
+    // Each lane's closest t so far, with the block it is in and its edge functions of p1 and
+    // p2 and determinant (for the barycentrics). (Comparing t det / det by cross-multiplying
+    // instead of dividing would overflow: they grow as the cube and the square of the
+    // scene's size.)
     VFloat best = VFloat{} + tMax, bestE1 = {}, bestE2 = {}, bestDet = {};
     VInt block = {};
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
