@@ -58,14 +58,24 @@ void SphereBoundsFunc(const RTCBoundsFunctionArguments *args) {
     args->bounds_o->upper_z = b.pMax.z;
 }
 
+// The sphere's hit t in (tMin, tMax) along the render-space ray o + t d, if any: every sphere
+// query (Embree's callbacks and the flat test) goes through here.
+bool HitsSphere(const Sphere &s, const Point3f &o, const Vector3f &d, Float tMin, Float tMax, Float *t) {
+    return s.IntersectObject(s.objectFromRender.ApplyPoint(o), s.objectFromRender.ApplyVector(d), tMax, t) &&
+           *t > tMin;
+}
+
+// Whether an occlusion query skips sphere s (Accelerator::Occluded's skipSphere).
+bool Skips(const Sphere &s, uint32_t skipSphere) { return s.id != 0 && s.id == skipSphere; }
+
 void SphereIntersectFunc(const RTCIntersectFunctionNArguments *args) {
     if (args->N != 1 || !args->valid[0]) return;
     const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
     RTCRayHit *rh = reinterpret_cast<RTCRayHit *>(args->rayhit);
-    Point3f o = s->objectFromRender.ApplyPoint(Point3f(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z));
-    Vector3f d = s->objectFromRender.ApplyVector(Vector3f(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z));
     Float t;
-    if (!s->IntersectObject(o, d, rh->ray.tfar, &t) || t <= rh->ray.tnear) return;
+    if (!HitsSphere(*s, Point3f(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z),
+                    Vector3f(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z), rh->ray.tnear, rh->ray.tfar, &t))
+        return;
     rh->ray.tfar = t;
     rh->hit.u = rh->hit.v = 0;
     rh->hit.Ng_x = rh->hit.Ng_y = 0;
@@ -85,12 +95,12 @@ struct OccludedContext {
 void SphereOccludedFunc(const RTCOccludedFunctionNArguments *args) {
     if (args->N != 1 || !args->valid[0]) return;
     const Sphere *s = static_cast<const Sphere *>(args->geometryUserPtr);
-    if (s->id != 0 && reinterpret_cast<const OccludedContext *>(args->context)->skipSphere == s->id) return;
+    if (Skips(*s, reinterpret_cast<const OccludedContext *>(args->context)->skipSphere)) return;
     RTCRay *r = reinterpret_cast<RTCRay *>(args->ray);
-    Point3f o = s->objectFromRender.ApplyPoint(Point3f(r->org_x, r->org_y, r->org_z));
-    Vector3f d = s->objectFromRender.ApplyVector(Vector3f(r->dir_x, r->dir_y, r->dir_z));
     Float t;
-    if (s->IntersectObject(o, d, r->tfar, &t) && t > r->tnear) r->tfar = -Infinity;
+    if (HitsSphere(*s, Point3f(r->org_x, r->org_y, r->org_z), Vector3f(r->dir_x, r->dir_y, r->dir_z), r->tnear,
+                   r->tfar, &t))
+        r->tfar = -Infinity;
 }
 
 // Where a ray hit, whichever way it was found: Embree's geometry and primitive IDs (the
@@ -102,6 +112,7 @@ struct HitRecord {
 
 // A sphere of a small scene: tested when the ray crosses its bounds.
 struct FlatSphere {
+    const Sphere *sphere;
     Bounds3f bounds;
     unsigned geomID;
 };
@@ -283,7 +294,7 @@ void Accelerator::Impl::MakeFlat() {
     for (unsigned g = 0; g < top.records.size(); ++g) {
         const Record &r = top.records[g];
         if (r.kind == Record::Kind::Sphere) {
-            flatSpheres.push_back({SphereBounds(*top.spheres[r.index]), g});
+            flatSpheres.push_back({top.spheres[r.index].get(), SphereBounds(*top.spheres[r.index]), g});
             continue;
         }
         const TriangleMesh &m = *top.meshes[r.index];
@@ -297,12 +308,9 @@ void Accelerator::Impl::MakeFlat() {
 }
 
 namespace {
-// The sphere's hit (its exact test) with t in (0, tMax), after a test of its bounds.
-bool HitsFlatSphere(const Sphere &s, const Bounds3f &bounds, const Ray &ray, Float tMax, Float *t) {
-    return CrossesBounds(bounds, ray.o, ray.d, tMax) &&
-           s.IntersectObject(s.objectFromRender.ApplyPoint(ray.o), s.objectFromRender.ApplyVector(ray.d),
-                             tMax, t) &&
-           *t > 0;
+// The sphere's hit with t in (0, tMax), after a test of its bounds.
+bool HitsFlatSphere(const FlatSphere &fs, const Ray &ray, Float tMax, Float *t) {
+    return CrossesBounds(fs.bounds, ray.o, ray.d, tMax) && HitsSphere(*fs.sphere, ray.o, ray.d, 0, tMax, t);
 }
 }  // namespace
 
@@ -311,11 +319,9 @@ bool Accelerator::Impl::FlatIntersect(const Ray &ray, HitRecord *h) const {
     bool found = flatTriangles.Closest(ray.o, ray.d, ray.tMax, &th);
     if (found)
         *h = {flatIDs[th.index].first, flatIDs[th.index].second, RTC_INVALID_GEOMETRY_ID, th.b1, th.b2, th.t};
-    const Object &top = objects[0];
     for (const FlatSphere &fs : flatSpheres) {
         Float t;
-        if (HitsFlatSphere(*top.spheres[top.records[fs.geomID].index], fs.bounds, ray,
-                           found ? h->t : ray.tMax, &t)) {
+        if (HitsFlatSphere(fs, ray, found ? h->t : ray.tMax, &t)) {
             *h = {fs.geomID, 0, RTC_INVALID_GEOMETRY_ID, 0, 0, t};
             found = true;
         }
@@ -325,11 +331,9 @@ bool Accelerator::Impl::FlatIntersect(const Ray &ray, HitRecord *h) const {
 
 bool Accelerator::Impl::FlatOccluded(const Ray &ray, uint32_t skipSphere) const {
     if (flatTriangles.Any(ray.o, ray.d, ray.tMax)) return true;
-    const Object &top = objects[0];
     for (const FlatSphere &fs : flatSpheres) {
-        const Sphere &s = *top.spheres[top.records[fs.geomID].index];
         Float t;
-        if (!(s.id != 0 && s.id == skipSphere) && HitsFlatSphere(s, fs.bounds, ray, ray.tMax, &t)) return true;
+        if (!Skips(*fs.sphere, skipSphere) && HitsFlatSphere(fs, ray, ray.tMax, &t)) return true;
     }
     return false;
 }
