@@ -12,7 +12,7 @@ Filter::Filter(Type type, Vector2f radius, Float sigma) : type(type), radius(rad
         throw PbrtError("filter radius must be positive");
     if (type == Type::Gaussian && !(sigma > 0)) throw PbrtError("gaussian filter sigma must be positive");
     // Each sample's weight is the filter's integral (see Sample): it must be a finite number.
-    Float integral = Integral();
+    integral = Integral1D(radius.x) * Integral1D(radius.y);
     if (!std::isfinite(radius.x) || !std::isfinite(radius.y) || !std::isfinite(integral) ||
         !(integral > 0))
         throw PbrtError("filter radius " + std::to_string(radius.x) + " x " +
@@ -96,7 +96,6 @@ Float Filter::Invert1D(Float x, Float r) const {
 }
 
 Float Filter::Evaluate(Point2f p) const { return Evaluate1D(p.x, radius.x) * Evaluate1D(p.y, radius.y); }
-Float Filter::Integral() const { return Integral1D(radius.x) * Integral1D(radius.y); }
 FilterSample Filter::Sample(Point2f u) const {
     // Exact sampling of a separable, non-negative filter: weight = f / pdf = integral.
     return {Point2f(Sample1D(u.x, radius.x), Sample1D(u.y, radius.y)), Integral()};

@@ -39,7 +39,7 @@ class Filter {
     std::string Description() const;
 
     Float Evaluate(Point2f p) const;
-    Float Integral() const;
+    Float Integral() const { return integral; }
     // The sample/pdf/invert triple of the normalized filter f / Integral().
     FilterSample Sample(Point2f u) const;
     Float PDF(Point2f p) const;
@@ -56,6 +56,7 @@ class Filter {
     Type type = Type::Box;
     Vector2f radius{0.5f, 0.5f};
     Float sigma = 0.5f;
+    Float integral = 1;  // computed once: it is every sample's weight
 };
 
 }  // namespace pbrt

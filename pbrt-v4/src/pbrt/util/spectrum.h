@@ -317,22 +317,36 @@ struct RGBSigmoidPolynomial {
     Float c0 = 0, c1 = 0, c2 = 0;  // x = (c0 t + c1) t + c2
 
     Float operator()(Float lambda) const {
-        Float t = Float((double(lambda) - kCenter) / kHalfWidth);
+        Float t = Float((double(lambda) - kCenter) * (1 / kHalfWidth));
         return Sigmoid((c0 * t + c1) * t + c2);
     }
     // The values at the wavelengths of lambda (the same as operator() at each; written
     // without branches so that the compiler computes the wavelengths side by side).
     SampledSpectrum Sample(const SampledWavelengths &lambda) const {
-        SampledSpectrum s;
-        for (int i = 0; i < NSpectrumSamples; ++i) s[i] = (*this)(lambda[i]);
-        return s;
+        // Each step over all four wavelengths, with selects instead of branches, so that
+        // the compiler makes each one vector instruction.
+        std::array<Float, NSpectrumSamples> x, s;
+        for (int i = 0; i < NSpectrumSamples; ++i) {
+            Float t = Float((double(lambda[i]) - kCenter) * (1 / kHalfWidth));
+            x[i] = (c0 * t + c1) * t + c2;
+        }
+        for (int i = 0; i < NSpectrumSamples; ++i) s[i] = SigmoidFinite(x[i]);
+        for (int i = 0; i < NSpectrumSamples; ++i) s[i] = Saturated(x[i], s[i]);
+        return SampledSpectrum(s);
     }
     Float MaxValue() const;
-    static Float Sigmoid(Float x) {
-        // Beyond 1e15 the value is within 1e-30 of its limit (and x * x could overflow):
-        // selected after computing both, without a branch.
-        Float s = 0.5f + x / (2 * std::sqrt(1 + x * x));
-        return std::abs(x) > 1e15f ? (x > 0 ? 1 : 0) : s;
+    static Float Sigmoid(Float x) { return Saturated(x, SigmoidFinite(x)); }
+
+  private:
+    // 1/2 + x / (2 sqrt(1 + x^2)) for |x| up to 1e15 (beyond, x * x could overflow).
+    static Float SigmoidFinite(Float x) {
+        Float xc = x < -1e15f ? -1e15f : (x > 1e15f ? 1e15f : x);
+        return 0.5f + xc / (2 * std::sqrt(1 + xc * xc));
+    }
+    // Beyond 1e15 the sigmoid is within 1e-30 of its limit: exactly 0 or 1 there.
+    static Float Saturated(Float x, Float s) {
+        Float limit = x > 0 ? 1.f : 0.f;
+        return std::abs(x) > 1e15f ? limit : s;
     }
 };
 

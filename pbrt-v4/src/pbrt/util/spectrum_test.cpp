@@ -191,6 +191,31 @@ TEST(RGBSigmoidPolynomial, MaxValueBoundsTheSpectrum) {
     EXPECT_EQ(RGBSigmoidPolynomial::Sigmoid(0), 0.5f);
 }
 
+// Sample computes the four wavelengths side by side: the same values as operator() at each,
+// across the whole range of x, the saturated ends (|x| > 1e15) and infinite coefficients.
+TEST(RGBSigmoidPolynomial, SampleEqualsPointEvaluation) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<Float> u(0, 1);
+    const Float scales[] = {1, 30, 1e6f, 1e17f, Infinity};
+    for (Float scale : scales)
+        for (int i = 0; i < 300; ++i) {
+            RGBSigmoidPolynomial p{scale * (2 * u(rng) - 1), scale * (2 * u(rng) - 1),
+                                   scale * (2 * u(rng) - 1)};
+            SampledWavelengths lambda = SampledWavelengths::SampleVisible(u(rng));
+            SampledSpectrum v = p.Sample(lambda);
+            for (int k = 0; k < NSpectrumSamples; ++k) {
+                Float expect = p(lambda[k]);
+                if (std::isnan(expect)) EXPECT_TRUE(std::isnan(v[k]));
+                else EXPECT_EQ(v[k], expect) << scale << " " << p.c0 << " " << p.c1 << " " << p.c2;
+                if (!std::isnan(expect)) EXPECT_TRUE(v[k] >= 0 && v[k] <= 1) << v[k];
+            }
+        }
+    EXPECT_EQ(RGBSigmoidPolynomial::Sigmoid(2e15f), 1);
+    EXPECT_EQ(RGBSigmoidPolynomial::Sigmoid(-2e15f), 0);
+    EXPECT_LT(RGBSigmoidPolynomial::Sigmoid(1e3f), 1);
+    EXPECT_TRUE(std::isnan(RGBSigmoidPolynomial::Sigmoid(std::numeric_limits<Float>::quiet_NaN())));
+}
+
 TEST(CIE, MatchingFunctionsIntegral) {
     // Our ybar table sums to pbrt-v4's CIE_Y_integral.
     EXPECT_NEAR(InnerProduct(Spectra::Y(), ConstantSpectrum(1)) / CIE_Y_integral, 1, 1e-6);
