@@ -191,7 +191,7 @@ TEST(RGBSigmoidPolynomial, MaxValueBoundsTheSpectrum) {
     EXPECT_EQ(RGBSigmoidPolynomial::Sigmoid(0), 0.5f);
 }
 
-// Sample computes the four wavelengths side by side: the same values as operator() at each,
+// Sample computes the four wavelengths side by side: the values of operator() at each,
 // across the whole range of x, the saturated ends (|x| > 1e15) and infinite coefficients.
 TEST(RGBSigmoidPolynomial, SampleEqualsPointEvaluation) {
     std::mt19937 rng(11);
@@ -206,7 +206,9 @@ TEST(RGBSigmoidPolynomial, SampleEqualsPointEvaluation) {
             for (int k = 0; k < NSpectrumSamples; ++k) {
                 Float expect = p(lambda[k]);
                 if (std::isnan(expect)) EXPECT_TRUE(std::isnan(v[k]));
-                else EXPECT_EQ(v[k], expect) << scale << " " << p.c0 << " " << p.c1 << " " << p.c2;
+                // Within 3e-7 (a few ulp of 0.5, where the sigmoid's additions round): a
+                // build may fuse the polynomial's multiply-adds differently in the two.
+                else EXPECT_NEAR(v[k], expect, 3e-7f) << scale << " " << p.c0 << " " << p.c1 << " " << p.c2;
                 if (!std::isnan(expect)) EXPECT_TRUE(v[k] >= 0 && v[k] <= 1) << v[k];
             }
         }
