@@ -316,20 +316,13 @@ struct RGBSigmoidPolynomial {
     static constexpr double kCenter = 595, kHalfWidth = 235;
     Float c0 = 0, c1 = 0, c2 = 0;  // x = (c0 t + c1) t + c2
 
-    Float operator()(Float lambda) const {
-        Float t = Float((double(lambda) - kCenter) * (1 / kHalfWidth));
-        return Sigmoid((c0 * t + c1) * t + c2);
-    }
-    // The values at the wavelengths of lambda (the same as operator() at each; written
-    // without branches so that the compiler computes the wavelengths side by side).
+    Float operator()(Float lambda) const { return Sigmoid(Polynomial(lambda)); }
+    // The values at the wavelengths of lambda, those of operator() at each: each step over
+    // all four wavelengths, with selects instead of branches, so that the compiler makes
+    // each one vector instruction.
     SampledSpectrum Sample(const SampledWavelengths &lambda) const {
-        // Each step over all four wavelengths, with selects instead of branches, so that
-        // the compiler makes each one vector instruction.
         std::array<Float, NSpectrumSamples> x, s;
-        for (int i = 0; i < NSpectrumSamples; ++i) {
-            Float t = Float((double(lambda[i]) - kCenter) * (1 / kHalfWidth));
-            x[i] = (c0 * t + c1) * t + c2;
-        }
+        for (int i = 0; i < NSpectrumSamples; ++i) x[i] = Polynomial(lambda[i]);
         for (int i = 0; i < NSpectrumSamples; ++i) s[i] = SigmoidFinite(x[i]);
         for (int i = 0; i < NSpectrumSamples; ++i) s[i] = Saturated(x[i], s[i]);
         return SampledSpectrum(s);
@@ -338,6 +331,11 @@ struct RGBSigmoidPolynomial {
     static Float Sigmoid(Float x) { return Saturated(x, SigmoidFinite(x)); }
 
   private:
+    // x at lambda.
+    Float Polynomial(Float lambda) const {
+        Float t = Float((double(lambda) - kCenter) * (1 / kHalfWidth));
+        return (c0 * t + c1) * t + c2;
+    }
     // 1/2 + x / (2 sqrt(1 + x^2)) for |x| up to 1e15 (beyond, x * x could overflow).
     static Float SigmoidFinite(Float x) {
         Float xc = x < -1e15f ? -1e15f : (x > 1e15f ? 1e15f : x);
