@@ -33,8 +33,8 @@ from .solvers import DEFAULT_SOLVER, SOLVERS, SolverResult
 from .table import Table
 from .threads import single_threaded_blas
 
-__all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget", "DEFAULT_GRID",
-           "SOLVERS"]
+__all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget", "starting_table",
+           "DEFAULT_GRID", "SOLVERS"]
 
 
 def _normalize_rows(grid: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -207,6 +207,20 @@ def optimize_spectrum(
         message=run.message)
     result.seconds = time.monotonic() - t0
     return result
+
+
+@float64
+def starting_table(spectrum, *, grid: np.ndarray | str = "auto", reflectances=None) -> Table:
+    """The table :func:`optimize_spectrum` starts from for ``spectrum``: the equal-mass
+    partition of I (x + y + z) (:func:`wavelength_pdf.init.equal_mass_partition`) on the grid
+    the optimizer would choose ("auto") or on ``grid``."""
+    grid = _auto_grid(spectrum) if isinstance(grid, str) else np.asarray(grid, dtype=np.float64)
+    problem = objective.make_problem(spectrum, grid, reflectances)
+    return Table(grid=grid.copy(), pdfs=init_mod.equal_mass_partition(problem),
+                 comments=["method: start", f"name: {getattr(spectrum, 'name', '')}",
+                           f"source: {_source(spectrum, reflectances)}",
+                           "the optimizer's starting point: equal-mass partition of I (x + y + z) "
+                           "on its grid (wavelength_pdf.init)"])
 
 
 def _source(spectrum, reflectances) -> str:

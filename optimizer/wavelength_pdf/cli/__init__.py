@@ -5,6 +5,10 @@ Commands
 optimize SPECTRUM -o TABLE
     Optimize the four wavelength densities for one spectrum (or one per distinct emitter of a
     pbrt-v4 scene) and write the table(s) with a comment header (:mod:`.optimize`).
+baseline METHOD [SPECTRUM] -o TABLE
+    A simple sampler as a table, no optimizer: stratified sampling of the spectrum (spd,
+    luminance, xyz), stratified uniform, pbrt-v4's visible density, the optimizer's start
+    (:mod:`.baseline`, design §1.7).
 batch FOLDER -o OUTDIR
     Every spectrum file of a folder to a table each plus ``summary.csv``; parallel and
     resumable (:mod:`.batch`, over :mod:`wavelength_pdf.batch`).
@@ -145,7 +149,7 @@ def positive_int(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``wavelength-pdf`` (optimize, batch, show, evaluate, grid, demo)."""
-    from wavelength_pdf.cli import batch, optimize, show
+    from wavelength_pdf.cli import baseline, batch, optimize, show
 
     names = solver_names()
     p = argparse.ArgumentParser(
@@ -162,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", metavar="COMMAND",
                            title="commands (run 'wavelength-pdf COMMAND --help' for details)")
     optimize.add_parser(sub, names)
+    baseline.add_parser(sub)
     batch.add_parser(sub, names)
     show.add_parser(sub)
 
