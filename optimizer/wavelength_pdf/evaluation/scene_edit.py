@@ -63,12 +63,15 @@ def _span(tokens: list[Token]) -> tuple[int, int]:
 def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
                lo: float = 380.0, hi: float = 780.0,
                resolution: tuple[int, int] | float | None = None,
-               maxdepth: int | None = None) -> Path:
+               maxdepth: int | None = None, pixel_sampler: str | None = None) -> Path:
     """Write a copy of ``scene`` at ``out`` lit by ``spectrum`` (None: keep the emitters).
 
     ``resolution`` is the film's new (width, height), or a factor applied to the scene's own
     size (pbrt-v4's 1280x720 when it gives none; at least one pixel a side), or None to keep it.
     ``maxdepth`` replaces the integrator's "maxdepth" (added when it gives none); None keeps it.
+    ``pixel_sampler`` (e.g. "independent") replaces the scene's ``Sampler`` statement by one of
+    that type with the same "pixelsamples" (added before ``WorldBegin`` when there is none);
+    None keeps it.
 
     Included files are inlined into the copy's folder as edited copies of their own, so that
     emitters and file names inside them are handled the same way.
@@ -80,7 +83,8 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
     """
     scene, out = Path(scene).resolve(), Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, maxdepth, depth=0)
+    body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, maxdepth, depth=0,
+                      pixel_sampler=pixel_sampler)
     tmp = out.with_suffix(out.suffix + ".tmp")
     tmp.write_text(body)
     tmp.replace(out)
@@ -88,7 +92,8 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
 
 
 def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, hi: float,
-               resolution: tuple[int, int] | float | None, maxdepth: int | None, depth: int) -> str:
+               resolution: tuple[int, int] | float | None, maxdepth: int | None, depth: int,
+               pixel_sampler: str | None = None) -> str:
     if depth > 32:
         raise SpectrumError(f"{path}: Include nesting deeper than 32 (a cycle?)")
     try:
@@ -103,13 +108,19 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
         if not p.is_absolute() and (here / p).exists():
             edits.append((tok.start, tok.end, '"' + str((here / p).resolve()) + '"'))
 
+    sampler_seen = False
     for st in statements(tokenize(text, path)):
         d = st.directive.text
+        if d == "WorldBegin" and pixel_sampler and depth == 0 and not sampler_seen:
+            anchor = st.directive.start
+            edits.append((anchor, anchor, f'Sampler "{pixel_sampler}"\n'))
+            sampler_seen = True
         if d in ("Include", "Import") and st.items and isinstance(st.items[0], Token):
             arg = st.items[0]
             child = (here / arg.text).resolve()
             name = f"include-{depth + 1}-{abs(hash(str(child))) % 10**8}.pbrt"
-            (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, maxdepth, depth + 1))
+            (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, maxdepth,
+                                                  depth + 1, pixel_sampler))
             edits.append((arg.start, arg.end, f'"{outdir / name}"'))
             continue
         if d not in _WITH_PARAMS:
@@ -145,6 +156,16 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
                 absolute(p.values[0])
             elif p.type == "spectrum" and p.values and p.values[0].kind == "str":
                 absolute(p.values[0])
+        if d == "Sampler" and pixel_sampler:
+            sampler_seen = True
+            count = next((p.values[0].text for p in st.params if p.name == "pixelsamples" and p.values), None)
+            last = st.items[-1] if st.items else st.directive
+            end = (last[-1] if isinstance(last, list) and last else last).end
+            if text[end:].lstrip().startswith("]"):
+                end = text.index("]", end) + 1
+            new = f'Sampler "{pixel_sampler}"' + (f' "integer pixelsamples" [ {count} ]' if count else "")
+            edits.append((st.directive.start, end, new))
+            continue
         if emitting and not replaced:
             # No L/I given (the colour space's illuminant): add the spectrum after the type.
             anchor = st.args[0].end if st.args else st.directive.end

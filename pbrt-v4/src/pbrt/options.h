@@ -25,6 +25,10 @@ struct RenderOptions {
     Point2i resolution{0, 0};             // --resolution WxH (0: the film's)
     Float resolutionScale = 1;            // --resolution-scale S: multiplies the resolution
     std::optional<int> maxDepth;          // --maxdepth: overrides the integrator's
+    // --wavelength-repeats K: trace every camera sample K times with the same random numbers
+    // except the wavelength number, shifted by k/K, and average them (design §5.2): the
+    // benchmark's floor, an image whose wavelength noise is averaged away.
+    int wavelengthRepeats = 1;
     // --emission-spectrum FILE: write the scene's total emitted spectral power (design §5.6)
     // instead of rendering (the film's output path is then not checked).
     std::string emissionSpectrum;

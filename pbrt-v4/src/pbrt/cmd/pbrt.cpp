@@ -40,6 +40,10 @@ Wavelengths (four per path from one random number):
   --wavelength-pdf-defensive S mix a uniform share S in [0, 1] into each density of the
                                table, over the table's range (e.g. 0.01): removes zero
                                sampling density where a light emits, which biases the image
+  --wavelength-repeats K       trace each camera sample K times with the same random
+                               numbers but the wavelength number shifted by k/K, and
+                               average: wavelength noise averaged away at K times the cost
+                               (the benchmark's floor, design §5.2; default 1)
 Scene:
   --emission-spectrum FILE     render nothing: write the scene's total emitted spectral
                                power (pbrt-v4's light power summed over its lights) to FILE
@@ -157,6 +161,8 @@ int main(int argc, char **argv) {
         } else if (flag == "--wavelength-pdf") {
             opts.wavelengthTable = value();
             if (opts.wavelengthTable.empty()) Usage("--wavelength-pdf needs a file name");
+        } else if (flag == "--wavelength-repeats") {
+            opts.wavelengthRepeats = int(ParseInt(flag, value(), 1, 1 << 16));
         } else if (flag == "--wavelength-pdf-defensive") {
             hasDefensive = true;
             opts.defensiveShare = Float(ParseFloat(flag, value()));
@@ -207,7 +213,7 @@ int main(int argc, char **argv) {
                          fs.pixelBounds.Width(), fs.pixelBounds.Height(),
                          scene->sampler.SamplesPerPixel(), scene->sampler.Description().c_str(),
                          scene->integrator.maxDepth, scene->wavelengths.Description().c_str());
-        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet);
+        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet, opts.wavelengthRepeats);
         scene->film->WriteImage(outfile, RenderMetadata(*scene, stats));
         if (!opts.quiet)
             std::fprintf(stderr,
