@@ -135,6 +135,9 @@ LAMPS: dict[str, LampSpec] = {l.key: l for l in [
 #: Every simple sampler is a table of design §1.7; with the optimizer's start and the optimized
 #: (and reference) tables, the rows every job compares.
 TABLE_ROWS = ("uniform", "visible", "spd", "luminance", "xyz", "start", "optimized")
+#: The table optimized for the scene's own material colours (``optimize --reflectances scene``,
+#: design §4.5), on the scene sweep's low-discrepancy jobs under spiky lamps.
+SCENE_COLOURS = "optimized-scene"
 #: The simple samplers (no optimizer): "the best simple sampler" is the best of these.
 SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
 #: Check row: pbrt-v4's own visible sampling, which the ``visible`` table must match.
@@ -209,7 +212,8 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
         lamps = [None] if s.own_lamps else [LAMPS[k] for k in SCENE_SWEEP_LAMPS]
         for lamp in lamps:
             for ps in PIXEL_SAMPLERS:
-                add(g, Job(s, lamp, ps, sweep="scenes"))
+                colours = ps == "sobol" and (lamp is None or lamp.spiky)
+                add(g, Job(s, lamp, ps, sweep="scenes", rows=TABLE_ROWS + ((SCENE_COLOURS,) if colours else ())))
     return g
 
 
@@ -235,7 +239,8 @@ def add(g: GridSpec, job: Job) -> None:
         if other.name == job.name:
             if job.sweep not in other.sweep.split("+"):
                 g.jobs[i] = replace(other, sweep=f"{other.sweep}+{job.sweep}",
-                                    spp=tuple(sorted(set(other.spp) | set(job.spp))))
+                                    spp=tuple(sorted(set(other.spp) | set(job.spp))),
+                                    rows=other.rows + tuple(r for r in job.rows if r not in other.rows))
             return
     if job.scene.water and not job.scene.available(g.shared) and job.scene.path(g.shared).is_file():
         g.skipped.append(f"{job.name}: the project's water body is missing (scripts/make_benchmark_scenes.py)")

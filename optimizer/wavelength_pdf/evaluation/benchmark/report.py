@@ -23,7 +23,7 @@ PAYS = 1.2
 
 COLUMNS = ["job", "sweep", "scene", "lamp", "kind", "spiky", "pixel_sampler", "row", "spp",
            *M.MEASURES, "mse_rse", "bias_z", "cpu", "depth", "ratio_de2", "ratio_de", "ratio_mse",
-           "share_removed_de2", "truth_de", "truth_de2"]
+           "share_removed_de2", "de2_lo", "truth_de", "truth_de2"]
 
 
 def flatten(scores: Sequence[dict]) -> list[dict]:
@@ -39,6 +39,7 @@ def flatten(scores: Sequence[dict]) -> list[dict]:
                 r = {"job": s["job"], "sweep": s["sweep"], "scene": s["scene"], "lamp": s["lamp"],
                      "kind": s["kind"], "spiky": s["spiky"], "pixel_sampler": s["pixel_sampler"], "row": row,
                      "spp": int(n), **{k: m.get(k) for k in (*M.MEASURES, "mse_rse", "bias_z", "cpu", "depth")},
+                     "de2_lo": m.get("de2_lo", float("nan")),
                      "truth_de": s["truth_de"], "truth_de2": s["truth_de2"]}
                 for k in ("de2", "de", "mse"):
                     r[f"ratio_{k}"] = m[k] / opt[k] if opt and opt[k] > 0 else float("nan")
@@ -98,10 +99,10 @@ def _fmt(x: float, digits: int = 2) -> str:
 
 
 def ratio_table(rows: Sequence[dict], jobs: Sequence[str], spp: int, measure: str = MAIN,
-                extra: Sequence[str] = ("reference", G.BUILTIN)) -> str:
+                extra: Sequence[str] = ("reference", G.SCENE_COLOURS, G.BUILTIN)) -> str:
     """Markdown: per job, each sampler's error over the table's, the best simple one, the
     table's share of the removable error and the floor's share of the table's error."""
-    cols = [*G.SIMPLE, "start", *extra]
+    cols = [c for c in (*G.SIMPLE, "start", *extra) if any(_get(rows, j, c, spp) for j in jobs)]
     head = ("| job | " + " | ".join(cols) + " | best simple / table | table removes | floor / table |\n|"
             + "---|" * (len(cols) + 4) + "\n")
     lines = []
@@ -115,9 +116,12 @@ def ratio_table(rows: Sequence[dict], jobs: Sequence[str], spp: int, measure: st
             cells.append(_fmt(r[measure] / opt[measure]) if r and opt[measure] > 0 else "–")
         name, e = best_simple(rows, j, spp, measure)
         flo = _get(rows, j, G.FLOOR, spp)
+        floor = "–"
+        if flo:
+            lo = flo.get(f"{measure}_lo", float("nan"))
+            floor = (f"{_fmt(lo / opt[measure])}-" if math.isfinite(lo) else "") + _fmt(flo[measure] / opt[measure])
         lines.append(f"| {j} | " + " | ".join(cells) + f" | **{_fmt(e / opt[measure])}** ({name}) | "
-                     f"{_fmt(100 * opt['share_removed_de2'], 0)} % | "
-                     f"{_fmt(flo[measure] / opt[measure]) if flo else '–'} |")
+                     f"{_fmt(100 * opt['share_removed_de2'], 0)} % | {floor} |")
     return head + "\n".join(lines) + "\n"
 
 
@@ -161,7 +165,7 @@ def plot_errors(rows: Sequence[dict], jobs: Sequence[str], path: Path, measure: 
                              squeeze=False)
     styles = {"optimized": dict(color="k", lw=2), G.FLOOR: dict(color="0.5", ls=":", lw=2)}
     for ax, job in zip(axes.ravel(), jobs):
-        for row in [*G.SIMPLE, "start", "reference", "optimized", G.FLOOR]:
+        for row in [*G.SIMPLE, "start", "reference", G.SCENE_COLOURS, "optimized", G.FLOOR]:
             pts = sorted((r["spp"], r[measure]) for r in rows if r["job"] == job and r["row"] == row)
             if pts:
                 ax.loglog(*zip(*pts), marker="o", ms=3, label=row, **styles.get(row, {}))

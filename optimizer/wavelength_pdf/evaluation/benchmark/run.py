@@ -37,6 +37,9 @@ from wavelength_pdf.table import read_table, write_table
 
 #: Wavelength range of every table and of the lamp in the scene copies (design §6.1).
 LO, HI = 380.0, 780.0
+#: Bumped when the scores of the same images change (a new measure or a fixed one), so that
+#: cached ``scores.json`` files are computed again.
+SCORES_VERSION = "1"
 #: Samplers of the reference's four chunks.
 TRUTH_ROWS = (G.BUILTIN, "uniform", "spd", "luminance")
 
@@ -50,6 +53,8 @@ class JobPlan:
     scene: Path
     spectrum: Spectrum
     tables: dict[str, Path]
+    #: The scene's material colours, for the table optimized for them (design §4.5).
+    reflectances: object | None = None
     images: dict[tuple[str, int, int], RenderJob] = field(default_factory=dict)
     floor: dict[tuple[int, int], RenderJob] = field(default_factory=dict)
     truth_chunks: list[RenderJob] = field(default_factory=list)
@@ -122,7 +127,7 @@ def baseline_tables(spectrum: Spectrum, folder: Path, rows: Sequence[str], job: 
         if row == "optimized":
             paths[row] = folder / "optimized.csv"
             continue
-        if row == "reference":
+        if row in ("reference", G.SCENE_COLOURS):
             continue
         path = folder / f"{row}.csv"
         if not path.is_file():
@@ -143,7 +148,13 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
     rows = [*job.rows, *(["reference"] if "reference" in tables else []), G.BUILTIN]
     folder = job_folder(out, job)
     renders = folder / "renders"
-    p = JobPlan(job, folder, scene, spectrum, tables)
+    reflectances = None
+    if G.SCENE_COLOURS in job.rows:
+        from wavelength_pdf.reflectances import load_reflectances
+
+        tables[G.SCENE_COLOURS] = folder / f"{G.SCENE_COLOURS}.csv"
+        reflectances = load_reflectances("scene", scene=scene, lo=LO, hi=HI, pbrt=pbrt)
+    p = JobPlan(job, folder, scene, spectrum, tables, reflectances)
     for spp in job.spp:
         for seed in job.seeds:
             for row in rows:
@@ -165,10 +176,10 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
 # --- Running ---------------------------------------------------------------------------
 
 
-def _table_task(spectrum: Spectrum, path: Path) -> Path:
+def _table_task(spectrum: Spectrum, path: Path, reflectances=None) -> Path:
     from wavelength_pdf.evaluation.cluster import table_task
 
-    return table_task(spectrum, path, LO, HI)
+    return table_task(spectrum, path, LO, HI, reflectances)
 
 
 def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str | None = None,
@@ -183,8 +194,9 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
     todo = [(p, r) for p in plans for r in p.renders() if r.done() is None or not _table_ready(r)]
-    optimize = {p.tables["optimized"]: p.spectrum for p in plans
-                if "optimized" in p.tables and not p.tables["optimized"].is_file()}
+    optimize = {p.tables[row]: (p.spectrum, p.reflectances if row == G.SCENE_COLOURS else None)
+                for p in plans for row in ("optimized", G.SCENE_COLOURS)
+                if row in p.tables and not p.tables[row].is_file()}
     if not todo and not optimize:
         say("benchmark: every render is done (cached)")
         return
@@ -196,7 +208,7 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
             f"({len(plans)} jobs); estimated CPU time {cost / 3600:.2f} h, about "
             f"{cost / 3600 / max(threads, 1):.2f} h wall on {threads} render threads"
             + (f"; {len(optimize)} table(s) to optimize first (not in the estimate)" if optimize else ""))
-        made = {path: client.submit(_table_task, sp, path, pure=False) for path, sp in optimize.items()}
+        made = {path: client.submit(_table_task, sp, path, refl, pure=False) for path, (sp, refl) in optimize.items()}
         futures = []
         # Cheap renders first, so that a job's scores can be read early; rows interleaved.
         for p, r in sorted(todo, key=lambda pr: pr[1].spp * _repeats(pr[1])):
@@ -258,7 +270,7 @@ def score(p: JobPlan) -> dict:
 
     keys = [rendering.render_key(r.scene, r.sampler, r.spp, r.seed, r.pbrt) for r in p.renders()]
     cache = p.outdir / "scores.json"
-    key = rendering.file_digest(extra=json.dumps(keys))
+    key = rendering.file_digest(extra=json.dumps([SCORES_VERSION, keys]))
     if cache.is_file():
         try:
             done = json.loads(cache.read_text())
@@ -297,5 +309,13 @@ def score(p: JobPlan) -> dict:
             m["depth"] = float(np.mean([x["depth"] for x in h]))
             per_spp[str(n)] = m
         out["rows"][row] = per_spp
+    # The floor keeps 1/K (or less: the K offsets are stratified) of the spd table's
+    # wavelength noise; its lower bound subtracts all of that, (K F - E_spd) / (K - 1).
+    k = p.job.floor_repeats
+    for n, f in out["rows"].get(G.FLOOR, {}).items():
+        spd = out["rows"].get(G.FLOOR_TABLE, {}).get(n)
+        if spd and k > 1:
+            for m in measures.SQUARED:
+                f[f"{m}_lo"] = max(0.0, (k * f[m] - spd[m]) / (k - 1))
     rendering.write_json(cache, out)
     return out
