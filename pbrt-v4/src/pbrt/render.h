@@ -29,11 +29,12 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet);
 //   samplesPerPixel           int     samples per pixel (pbrt-v4's name)
 //   renderTimeSeconds         float   wall-clock seconds of the render (pbrt-v4's name)
 //   seed                      string  the sampler's seed, in decimal (EXR has no 64-bit int)
-//   wavelengthSampler         string  "visible", "uniform" or "table"
+//   wavelengthSampler         string  "visible", "uniform", "table" or "emission"
 //   wavelengthRange           v2f     the range it samples, in nm
 //   wavelengthTable           string  the table file as named (only with a table)
 //   wavelengthTableSHA256     string  SHA-256 of the table file's bytes, as sha256sum prints it
 //   wavelengthDefensiveShare  float   the uniform share mixed into the table (--wavelength-pdf-defensive)
+//   wavelengthEmissionWeight  string  with emission sampling: its weight, "spd", "luminance" or "xyz"
 ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats);
 
 // CPU time (user + system) used by this process so far, in seconds.
