@@ -32,9 +32,14 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     m.strings["wavelengthSampler"] = scene.wavelengths.Name();
     m.float2s["wavelengthRange"] = {float(scene.wavelengths.MinLambda()), float(scene.wavelengths.MaxLambda())};
     if (const TableWavelengthSampler *t = scene.wavelengths.Table()) {
-        m.strings["wavelengthTable"] = t->file;
-        m.strings["wavelengthTableSHA256"] = t->sha256;
-        m.floats["wavelengthDefensiveShare"] = float(t->share);
+        if (!t->emissionWeight.empty()) {
+            // Emission sampling: a table built from the scene, not read from a file.
+            m.strings["wavelengthEmissionWeight"] = t->emissionWeight;
+        } else {
+            m.strings["wavelengthTable"] = t->file;
+            m.strings["wavelengthTableSHA256"] = t->sha256;
+            m.floats["wavelengthDefensiveShare"] = float(t->share);
+        }
     }
     return m;
 }

@@ -33,7 +33,7 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
 //   samplesPerPixel           int     samples per pixel (pbrt-v4's name)
 //   renderTimeSeconds         float   wall-clock seconds of the render (pbrt-v4's name)
 //   seed                      string  the sampler's seed, in decimal (EXR has no 64-bit int)
-//   wavelengthSampler         string  "visible", "uniform" or "table"
+//   wavelengthSampler         string  "visible", "uniform", "table" or "emission"
 //   wavelengthRange           v2f     the range it samples, in nm
 //   wavelengthTable           string  the table file as named (only with a table)
 //   wavelengthTableSHA256     string  SHA-256 of the table file's bytes, as sha256sum prints it
@@ -41,6 +41,7 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
 //   renderCPUSeconds          float   CPU seconds (user + system, all threads) of the render
 //   meanPathDepth             float   surfaces a camera path reached (at most maxdepth + 1), averaged
 //   wavelengthRepeats         int     K of --wavelength-repeats (only when K > 1)
+//   wavelengthEmissionWeight  string  with emission sampling: its weight, "spd", "luminance" or "xyz"
 ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats);
 
 // CPU time (user + system) used by this process so far, in seconds.
