@@ -3,6 +3,9 @@
 #include <pbrt/bumpmap.h>
 #include <pbrt/util/paramdict.h>
 
+#include <cmath>
+#include <cstdio>
+
 namespace pbrt {
 
 TrowbridgeReitzDistribution MaterialRoughness::Distribution(const TextureEvalContext &ctx) const {
@@ -165,8 +168,10 @@ DiffuseTransmissionMaterial CreateDiffuseTransmission(const ParameterDictionary 
             if (sum > 1.001f) {
                 FileLoc where = params.Find("transmittance") ? params.Loc("transmittance")
                               : params.Find("reflectance") ? params.Loc("reflectance") : params.Loc("scale");
-                Warning(where, "diffusetransmission: scale * (reflectance + transmittance) is " +
-                                   std::to_string(sum) + " at " + std::to_string(nm) +
+                char value[32];
+                std::snprintf(value, sizeof(value), "%.3g", double(sum));
+                Warning(where, std::string("diffusetransmission: scale * (reflectance + transmittance) is ") +
+                                   value + " at " + std::to_string(nm) +
                                    " nm: the surface gives out more light than it receives");
                 break;
             }
