@@ -89,7 +89,7 @@ TEST(Emission, SpotAndPowerParameters) {
     // (per unit luminance) times its "scale", as in pbrt-v4.
     Lin s{{360, 830}, {1, 3}};
     std::string world = R"(
-LightSource "spot" "spectrum I" [360 1 830 3] "float scale" [2] "float coneangle" [40] "float conedelta" [10]
+LightSource "spot" "spectrum I" [360 1 830 3] "float scale" [2] "float coneangle" [40] "float conedeltaangle" [10]
 AttributeBegin
   AreaLightSource "diffuse" "spectrum L" [360 1 830 3] "float power" [7] "float scale" [100]
   Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 2]
