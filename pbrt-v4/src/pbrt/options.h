@@ -16,6 +16,8 @@ struct RenderOptions {
     int nThreads = 0;                     // --nthreads: 0 = all cores
     std::optional<uint64_t> seed;         // --seed: overrides the scene's seeds
     bool quiet = false;                   // --quiet: no progress bar or summary
+    // --quick: a quarter of the film's resolution each way and one sample per pixel (pbrt-v4).
+    bool quick = false;
     // Wavelength sampling (design §5): "visible" (pbrt-v4's default), "uniform" over
     // [lambdaMin, lambdaMax] (stratified), or "emission" (a table built from the scene's
     // emitted power times emissionWeight, design §1.7; emission.h).

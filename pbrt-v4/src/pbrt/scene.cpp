@@ -687,7 +687,7 @@ void SceneBuilder::EndOfFiles() {
     Desc samp = samplerDesc ? *samplerDesc : Desc{"zsobol", {}, FileLoc{}, nullptr};
     ParameterDictionary sampDict(samp.params);
     scene->sampler = pbrt::Sampler::Create(samp.name, sampDict, optionSeed ? uint64_t(*optionSeed) : 0,
-                                           opts.seed, opts.spp, samp.loc);
+                                           opts.seed, opts.spp, samp.loc, fs.fullResolution, opts.quick);
     CheckUnused(sampDict, "Sampler \"" + samp.name + "\"");
 
     // pbrt-v4's default integrator is "volpath", which we render as "path" (no media).
