@@ -139,6 +139,8 @@ Image RGBFilm::GetImage() const {
     img.width = settings.pixelBounds.Width();
     img.height = settings.pixelBounds.Height();
     img.channels = 3;
+    img.originX = settings.pixelBounds.pMin.x;
+    img.originY = settings.pixelBounds.pMin.y;
     img.pixels.resize(size_t(img.width) * img.height * 3);
     for (size_t i = 0; i < pixels.size(); ++i)
         for (int c = 0; c < 3; ++c)
@@ -152,6 +154,7 @@ void RGBFilm::WriteImage(const std::string &filename, ImageMetadata metadata) co
         metadata.chromaticities = ImageMetadata::Chromaticities{xy(cs->r), xy(cs->g), xy(cs->b), xy(cs->w)};
         metadata.strings["colorSpace"] = cs->Name();
     }
+    metadata.fullResolution = std::array<int, 2>{settings.fullResolution.x, settings.fullResolution.y};
     pbrt::WriteImage(filename, GetImage(), metadata);
 }
 

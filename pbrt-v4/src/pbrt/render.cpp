@@ -29,6 +29,15 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     m.floats["meanPathDepth"] = stats.paths ? float(double(stats.scatterings) / double(stats.paths)) : 0.f;
     if (stats.wavelengthRepeats > 1) m.ints["wavelengthRepeats"] = stats.wavelengthRepeats;
     m.strings["seed"] = std::to_string(scene.sampler.Seed());
+    // pbrt-v4's camera matrices (cameras.h), row by row.
+    auto rows = [](const SquareMatrix4 &a) {
+        std::array<float, 16> v;
+        for (int i = 0; i < 4; ++i)
+            for (int j = 0; j < 4; ++j) v[size_t(4 * i + j)] = float(a.m[i][j]);
+        return v;
+    };
+    m.matrices["worldToCamera"] = rows(scene.camera->CameraFromWorld());
+    m.matrices["worldToNDC"] = rows(scene.camera->NDCFromWorld());
     m.strings["wavelengthSampler"] = scene.wavelengths.Name();
     m.float2s["wavelengthRange"] = {float(scene.wavelengths.MinLambda()), float(scene.wavelengths.MaxLambda())};
     if (const TableWavelengthSampler *t = scene.wavelengths.Table()) {
