@@ -75,7 +75,8 @@ void WarnNonFinite(const Scene &scene, const Ray &cameraRay) {
 
 }  // namespace
 
-RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats) {
+RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats,
+                   const std::function<void(int sppDone)> &afterPass) {
     std::unique_ptr<tbb::global_control> limit;
     if (nThreads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(nThreads));
@@ -92,6 +93,9 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
     double cpu0 = ProcessCPUSeconds();
     std::atomic<uint64_t> scatterings{0};
 
+    // One pass of every sample, or passes of 1, 1, 2, 4, ..., 64 samples when afterPass is given.
+    for (int s0 = 0, passSize = 1; s0 < spp;) {
+    const int s1 = afterPass ? std::min(spp, s0 + passSize) : spp;
     tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 1), [&](const tbb::blocked_range<int> &range) {
         pbrt::Sampler sampler = scene.sampler;
         uint64_t depthSum = 0;
@@ -101,7 +105,7 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
             for (int y = y0; y < y1; ++y)
                 for (int x = x0; x < x1; ++x) {
                     Point2i p{x, y};
-                    for (int s = 0; s < spp; ++s) {
+                    for (int s = s0; s < s1; ++s) {
                         RGB rgb(0, 0, 0);
                         FilterSample fs;
                         for (int r = 0; r < repeats; ++r) {
@@ -131,16 +135,21 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                                 L = SampledSpectrum(0);
                             }
                             RGB c = film.ToRGB(L, lambda);
+                            if (film.IsSpectral()) film.AddSpectralSample(p, L, lambda, fs.weight / Float(repeats));
                             if (repeats == 1) rgb = c;
                             else rgb += c / Float(repeats);
                         }
                         film.AddSample(p, rgb, fs.weight);
                     }
                 }
-            progress.Update(int64_t(x1 - x0) * (y1 - y0) * spp);
+            progress.Update(int64_t(x1 - x0) * (y1 - y0) * (s1 - s0));
         }
         scatterings += depthSum;
     });
+    if (afterPass) afterPass(s1);
+    if (s0 > 0) passSize = std::min(2 * passSize, 64);
+    s0 = s1;
+    }
     progress.Done();
 
     RenderStats stats;

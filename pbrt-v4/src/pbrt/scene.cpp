@@ -257,8 +257,7 @@ class SceneBuilder : public ParserTarget {
         // A film that cannot be made (too big for memory, a bad resolution) is refused here,
         // before the world (perhaps huge meshes) is read; EndOfFiles makes it for real.
         ParameterDictionary early(filmDesc->params);
-        FilmSettings::Create(type, early, graphicsState.colorSpace, opts.resolution,
-                             opts.resolutionScale, loc);
+        FilmSettings::Create(type, early, graphicsState.colorSpace, opts, loc);
     }
     void Sampler(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
         RequireOptionsBlock("Sampler", loc);
@@ -662,7 +661,7 @@ void SceneBuilder::EndOfFiles() {
     Desc film = filmDesc ? *filmDesc : Desc{"rgb", {}, FileLoc{}, graphicsState.colorSpace};
     ParameterDictionary filmDict(film.params);
     FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
-                                           opts.resolution, opts.resolutionScale, film.loc);
+                                           opts, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
     if (opts.outfile.empty() && opts.emissionSpectrum.empty() && opts.materialReflectances.empty() &&
         opts.emissionTable.empty()) {
@@ -729,6 +728,9 @@ std::unique_ptr<Scene> Build(const RenderOptions &opts, const std::function<void
     auto scene = std::make_unique<Scene>();
     SceneBuilder builder(scene.get(), opts);
     parse(&builder);
+    scene->disablePixelJitter |= opts.disablePixelJitter;
+    scene->disableWavelengthJitter |= opts.disableWavelengthJitter;
+    Verbose("loaded the scene: " + std::to_string(scene->lights.size()) + " lights");
     return scene;
 }
 
