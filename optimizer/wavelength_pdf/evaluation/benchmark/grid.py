@@ -48,9 +48,9 @@ class SceneSpec:
 
     def available(self, shared: Path = SHARED) -> bool:
         if self.water:
-            from wavelength_pdf.evaluation.benchmark.water import WATER_MESH
+            from wavelength_pdf.evaluation.glass_of_water import WATER_PLY
 
-            if not WATER_MESH.is_file():
+            if not WATER_PLY.is_file():
                 return False
         return self.path(shared).is_file()
 
@@ -86,16 +86,16 @@ SCENES: dict[str, SceneSpec] = {s.key: s for s in [
     SceneSpec("glass-of-water", "shared:scenes/glass-of-water/scene-v4.pbrt",
               "dielectric interfaces with the project's water body", water=True),
     SceneSpec("colorchecker", "repo:scenes/benchmark/colorchecker/scene.pbrt",
-              "the 24 ColorChecker patches, direct light only"),
-    SceneSpec("prism", "repo:scenes/benchmark/prism/scene.pbrt", "a dispersive prism spreading the lamp's lines"),
+              "the 24 ColorChecker patches, direct light only", resolution=0.25),
+    SceneSpec("prism", "repo:scenes/benchmark/prism/scene.pbrt", "a dispersive prism spreading the lamp's lines", resolution=0.25),
     SceneSpec("tinted-glass", "repo:scenes/benchmark/tinted-glass/scene.pbrt",
-              "light filtered by coloured translucent panes"),
+              "light filtered by coloured translucent panes", resolution=0.25),
     SceneSpec("lamp-room", "repo:scenes/benchmark/lamp-room/scene.pbrt",
-              "sodium, LED and metal-halide lamps in separate places", own_lamps=True),
+              "sodium, LED and metal-halide lamps in separate places", own_lamps=True, resolution=0.25),
     SceneSpec("window-room", "repo:scenes/benchmark/window-room/scene.pbrt",
-              "daylight through a window and a fluorescent lamp inside", own_lamps=True),
+              "daylight through a window and a fluorescent lamp inside", own_lamps=True, resolution=0.25),
     SceneSpec("night-street", "repo:scenes/benchmark/night-street/scene.pbrt",
-              "a street under sodium, LED and metal-halide lamps", own_lamps=True),
+              "a street under sodium, LED and metal-halide lamps", own_lamps=True, resolution=0.25),
     SceneSpec("two-lamp-box", "repo:scenes/cornell-box-two-lamps/scene.pbrt",
               "the project's box under two lamps of different kinds", own_lamps=True),
     SceneSpec("project-box", "repo:scenes/cornell-box/scene.pbrt", "the project's own Cornell box"),

@@ -91,11 +91,11 @@ def write_scene(job: G.Job, out: Path, spectrum: Spectrum | None, shared: Path) 
     source = job.scene.path(shared)
     folder = job_folder(out, job)
     if job.scene.water:
-        from wavelength_pdf.evaluation.benchmark import water
+        from wavelength_pdf.evaluation.glass_of_water import with_water
 
-        source = water.glass_with_water(source, folder / "with-water")
+        source = with_water(source, folder / "with-water" / "scene.pbrt")
     return edit_scene(source, spectrum, folder / "scene.pbrt", lo=LO, hi=HI, resolution=job.size,
-                      pixel_sampler=job.pixel_sampler)
+                      pixel_sampler=job.pixel_sampler, cut_emitters=spectrum is None)
 
 
 def job_spectrum(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> Spectrum:
