@@ -151,9 +151,13 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
     reflectances = None
     if G.SCENE_COLOURS in job.rows:
         from wavelength_pdf.reflectances import load_reflectances
+        from wavelength_pdf.spectra import SpectrumError
 
-        tables[G.SCENE_COLOURS] = folder / f"{G.SCENE_COLOURS}.csv"
-        reflectances = load_reflectances("scene", scene=scene, lo=LO, hi=HI, pbrt=pbrt)
+        try:
+            reflectances = load_reflectances("scene", scene=scene, lo=LO, hi=HI, pbrt=pbrt)
+            tables[G.SCENE_COLOURS] = folder / f"{G.SCENE_COLOURS}.csv"
+        except SpectrumError:  # no diffuse colours in the scene (the glass of water): no such row
+            rows.remove(G.SCENE_COLOURS)
     p = JobPlan(job, folder, scene, spectrum, tables, reflectances)
     for spp in job.spp:
         for seed in job.seeds:
