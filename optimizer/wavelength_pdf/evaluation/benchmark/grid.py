@@ -40,7 +40,7 @@ class SceneSpec:
     #: The glass of water: the project's water body goes into the glass (its own is missing).
     water: bool = False
     #: The benchmark's film size: (w, h), or a factor on the scene's own.
-    resolution: tuple[int, int] | float = 0.0625
+    resolution: tuple[int, int] | float = 0.05
 
     def path(self, shared: Path = SHARED) -> Path:
         kind, _, rel = self.source.partition(":")
@@ -86,16 +86,16 @@ SCENES: dict[str, SceneSpec] = {s.key: s for s in [
     SceneSpec("glass-of-water", "shared:scenes/glass-of-water/scene-v4.pbrt",
               "dielectric interfaces with the project's water body", water=True),
     SceneSpec("colorchecker", "repo:scenes/benchmark/colorchecker/scene.pbrt",
-              "the 24 ColorChecker patches, direct light only", resolution=0.25),
-    SceneSpec("prism", "repo:scenes/benchmark/prism/scene.pbrt", "a dispersive prism spreading the lamp's lines", resolution=0.25),
+              "the 24 ColorChecker patches, direct light only", resolution=0.2),
+    SceneSpec("prism", "repo:scenes/benchmark/prism/scene.pbrt", "a dispersive prism spreading the lamp's lines", resolution=0.2),
     SceneSpec("tinted-glass", "repo:scenes/benchmark/tinted-glass/scene.pbrt",
-              "light filtered by coloured translucent panes", resolution=0.25),
+              "light filtered by coloured translucent panes", resolution=0.2),
     SceneSpec("lamp-room", "repo:scenes/benchmark/lamp-room/scene.pbrt",
-              "sodium, LED and metal-halide lamps in separate places", own_lamps=True, resolution=0.25),
+              "sodium, LED and metal-halide lamps in separate places", own_lamps=True, resolution=0.2),
     SceneSpec("window-room", "repo:scenes/benchmark/window-room/scene.pbrt",
-              "daylight through a window and a fluorescent lamp inside", own_lamps=True, resolution=0.25),
+              "daylight through a window and a fluorescent lamp inside", own_lamps=True, resolution=0.2),
     SceneSpec("night-street", "repo:scenes/benchmark/night-street/scene.pbrt",
-              "a street under sodium, LED and metal-halide lamps", own_lamps=True, resolution=0.25),
+              "a street under sodium, LED and metal-halide lamps", own_lamps=True, resolution=0.2),
     SceneSpec("two-lamp-box", "repo:scenes/cornell-box-two-lamps/scene.pbrt",
               "the project's box under two lamps of different kinds", own_lamps=True),
     SceneSpec("project-box", "repo:scenes/cornell-box/scene.pbrt", "the project's own Cornell box"),
@@ -168,7 +168,7 @@ class Job:
     spp: tuple[int, ...] = (16, 64, 256)
     #: Two seeds make a pair (their difference has twice one image's variance).
     seeds: tuple[int, int] = (1, 2)
-    truth_spp: int = 2048
+    truth_spp: int = 1024
     floor_repeats: int = 8
     #: The spp at which the floor (``floor_repeats`` times the cost) and the check row
     #: (pbrt-v4's own visible sampling) are rendered.
