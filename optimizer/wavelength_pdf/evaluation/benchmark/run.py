@@ -241,20 +241,27 @@ def _repeats(r: RenderJob) -> int:
 
 
 def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthreads, slots) -> float:
-    """CPU seconds of ``todo`` from two short renders of each scene copy (on the cluster)."""
+    """CPU seconds of ``todo`` from two short renders of one copy of each scene (on the
+    cluster): the copies of a scene differ only in their lamp and pixel sampler, which change
+    the cost little, and probing all of them took longer than some sweeps."""
     from wavelength_pdf.evaluation import cluster
 
-    scenes = sorted({r.scene for r in todo})
+    plan_of = {p.scene: p for p in plans}
+    wanted = {r.scene for r in todo}
+    probe_of: dict[str, JobPlan] = {}
+    for p in plans:
+        if p.scene in wanted:
+            probe_of.setdefault(p.job.scene.key, p)
     probes = {}
-    for s in scenes:
-        plan = next(p for p in plans if p.scene == s)
+    for key, plan in probe_of.items():
         vis = sampler_of(G.BUILTIN, plan.tables)
-        probes[s] = [(spp, client.submit(cluster.probe_task, RenderJob(s, plan.outdir / "probe" / f"{spp}.exr", vis,
-                                                                        spp, 1, plan.truth_chunks[0].pbrt),
-                                          nthreads, slots, pure=False))
-                     for spp in cluster.PROBE_SPP]
-    costs = {s: cluster.fit_cost([(spp, *f.result()) for spp, f in runs]) for s, runs in probes.items()}
-    return sum(costs[r.scene].cpu_seconds(r.spp * _repeats(r)) for r in todo)
+        probes[key] = [(spp, client.submit(cluster.probe_task,
+                                           RenderJob(plan.scene, plan.outdir / "probe" / f"{spp}.exr", vis, spp, 1,
+                                                     plan.truth_chunks[0].pbrt),
+                                           nthreads, slots, pure=False))
+                       for spp in cluster.PROBE_SPP]
+    costs = {k: cluster.fit_cost([(spp, *f.result()) for spp, f in runs]) for k, runs in probes.items()}
+    return sum(costs[plan_of[r.scene].job.scene.key].cpu_seconds(r.spp * _repeats(r)) for r in todo)
 
 
 # --- Scoring ---------------------------------------------------------------------------
