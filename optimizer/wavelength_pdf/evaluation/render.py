@@ -105,8 +105,26 @@ def file_digest(*paths: Path, extra: str = "") -> str:
     """A short content hash of files and a string (cache keys)."""
     h = hashlib.sha256(extra.encode())
     for p in paths:
-        h.update(Path(p).read_bytes())
+        h.update(_content_hash(Path(p)))
     return h.hexdigest()[:16]
+
+
+#: Content hashes of large files (the renderer) by (path, inode, size, times): a grid asks for
+#: the renderer's hash once per render, and reading a binary of tens of MB ten thousand times
+#: took longer than the renders. Small files (scenes, tables) are hashed every time, since one
+#: rewritten within the file system's timestamp tick would keep a stale hash.
+_HASHES: dict[tuple, bytes] = {}
+_CACHED_FROM = 1 << 20
+
+
+def _content_hash(path: Path) -> bytes:
+    st = path.stat()
+    if st.st_size < _CACHED_FROM:
+        return hashlib.sha256(path.read_bytes()).digest()
+    key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    if key not in _HASHES:
+        _HASHES[key] = hashlib.sha256(path.read_bytes()).digest()
+    return _HASHES[key]
 
 
 def _run(cmd: list[str], on_percent: Callable[[int], None] | None) -> tuple[int, str]:
