@@ -261,7 +261,14 @@ def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthre
                                            nthreads, slots, pure=False))
                        for spp in cluster.PROBE_SPP]
     costs = {k: cluster.fit_cost([(spp, *f.result()) for spp, f in runs]) for k, runs in probes.items()}
-    return sum(costs[plan_of[r.scene].job.scene.key].cpu_seconds(r.spp * _repeats(r)) for r in todo)
+    by_scene: dict[str, float] = {}
+    for r in todo:
+        key = plan_of[r.scene].job.scene.key
+        by_scene[key] = by_scene.get(key, 0.0) + costs[key].cpu_seconds(r.spp * _repeats(r))
+    print("benchmark: estimated CPU minutes by scene: "
+          + ", ".join(f"{k} {v / 60:.0f}" for k, v in sorted(by_scene.items(), key=lambda kv: -kv[1])),
+          file=sys.stderr)
+    return sum(by_scene.values())
 
 
 # --- Scoring ---------------------------------------------------------------------------
