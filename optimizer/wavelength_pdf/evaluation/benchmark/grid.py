@@ -86,7 +86,7 @@ SCENES: dict[str, SceneSpec] = {s.key: s for s in [
     SceneSpec("glass-of-water", "shared:scenes/glass-of-water/scene-v4.pbrt",
               "dielectric interfaces with the project's water body", water=True),
     SceneSpec("colorchecker", "repo:scenes/benchmark/colorchecker/scene.pbrt",
-              "the 24 ColorChecker patches, direct light only", resolution=0.2),
+              "the 24 ColorChecker patches, direct light only", resolution=0.1),
     SceneSpec("prism", "repo:scenes/benchmark/prism/scene.pbrt", "a dispersive prism spreading the lamp's lines", resolution=0.2),
     SceneSpec("tinted-glass", "repo:scenes/benchmark/tinted-glass/scene.pbrt",
               "light filtered by coloured translucent panes", resolution=0.2),
@@ -211,7 +211,7 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
     g = GridSpec(shared=shared)
     for s in LAMP_SWEEP_SCENES:
         for lamp in LAMPS.values():
-            add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), sweep="lamps"))
+            add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), floor_spp=(16,), sweep="lamps"))
     for s in SCENES.values():
         if s.key in ("project-box", "two-lamp-box"):
             continue
@@ -247,6 +247,7 @@ def add(g: GridSpec, job: Job) -> None:
             if job.sweep not in other.sweep.split("+"):
                 g.jobs[i] = replace(other, sweep=f"{other.sweep}+{job.sweep}",
                                     spp=tuple(sorted(set(other.spp) | set(job.spp))),
+                                    floor_spp=tuple(sorted(set(other.floor_spp) | set(job.floor_spp))),
                                     rows=other.rows + tuple(r for r in job.rows if r not in other.rows))
             return
     if job.scene.water and not job.scene.available(g.shared) and job.scene.path(g.shared).is_file():
