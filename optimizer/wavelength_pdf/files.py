@@ -17,49 +17,69 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_INPUT_BYTES", "read_input_bytes", "read_input_text"]
+__all__ = ["MAX_INPUT_BYTES", "InputFileError", "read_regular_file", "read_input_bytes",
+           "read_input_text"]
 
 #: The size cap of tables (design §2.3), spectra (§3.3) and reflectance files (§3.4): far
 #: above any real one (a table at 0.1 nm steps over 360-830 nm is ~0.5 MB).
 MAX_INPUT_BYTES = 64 << 20
 
 
-def read_input_bytes(path: str | os.PathLike, what: str, error: type[Exception],
-                     max_bytes: int | None = MAX_INPUT_BYTES) -> bytes:
-    """The bytes of the regular file ``path``, at most ``max_bytes`` of them (None: no cap).
+class InputFileError(ValueError):
+    """A file that is not read: ``path`` and ``reason``; the message reads ``PATH: reason``."""
 
-    ``what`` names the kind of file in messages ("table", "spectrum", ...); ``error`` is the
-    exception raised, with the message ``PATH: reason``.
+    def __init__(self, path: Path, reason: str):
+        super().__init__(f"{path}: {reason}")
+        self.path, self.reason = path, reason
+
+
+def read_regular_file(path: str | os.PathLike, what: str,
+                      max_bytes: int | None = MAX_INPUT_BYTES) -> bytes:
+    """The bytes of the regular file ``path``, at most ``max_bytes`` of them (None: no cap);
+    ``what`` names the kind of file in messages ("table", "spectrum", ...).
+
+    Raises
+    ------
+    InputFileError
+        Missing, a directory, not a regular file, larger than the cap, or unreadable.
     """
     path = Path(path)
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
         fd = os.open(path, flags)
-    except FileNotFoundError:
-        raise error(f"{path}: no such file") from None
+    except (FileNotFoundError, NotADirectoryError):
+        raise InputFileError(path, "no such file") from None
     except IsADirectoryError:
-        raise error(f"{path}: is a directory, not a {what} file") from None
-    except NotADirectoryError:
-        raise error(f"{path}: no such file") from None
+        raise InputFileError(path, f"is a directory, not a {what} file") from None
     except OSError as e:
-        raise error(f"{path}: cannot read ({e.strerror})") from None
+        raise InputFileError(path, f"cannot read ({e.strerror})") from None
+    too_large = f"larger than {(max_bytes or 0) >> 20} MiB, not a {what} file"
     with os.fdopen(fd, "rb") as fh:
         st = os.fstat(fd)
         if stat.S_ISDIR(st.st_mode):
-            raise error(f"{path}: is a directory, not a {what} file")
+            raise InputFileError(path, f"is a directory, not a {what} file")
         if not stat.S_ISREG(st.st_mode):
-            raise error(f"{path}: not a regular file (a device, FIFO or socket), not a {what} "
-                        "file")
-        limit = f"larger than {max_bytes >> 20} MiB, not a {what} file" if max_bytes else ""
+            raise InputFileError(path, f"not a regular file (a device, FIFO or socket), not a "
+                                       f"{what} file")
         if max_bytes is not None and st.st_size > max_bytes:
-            raise error(f"{path}: {limit}")
+            raise InputFileError(path, too_large)
         try:
             data = fh.read() if max_bytes is None else fh.read(max_bytes + 1)
         except OSError as e:
-            raise error(f"{path}: cannot read ({e.strerror})") from None
-    if max_bytes is not None and len(data) > max_bytes:
-        raise error(f"{path}: {limit}")
+            raise InputFileError(path, f"cannot read ({e.strerror})") from None
+    if max_bytes is not None and len(data) > max_bytes:  # it grew while it was read
+        raise InputFileError(path, too_large)
     return data
+
+
+def read_input_bytes(path: str | os.PathLike, what: str, error: type[Exception],
+                     max_bytes: int | None = MAX_INPUT_BYTES) -> bytes:
+    """:func:`read_regular_file`, raising ``error("PATH: reason")`` instead (the reader's own
+    error type: TableError, SpectrumError)."""
+    try:
+        return read_regular_file(path, what, max_bytes)
+    except InputFileError as e:
+        raise error(str(e)) from None
 
 
 def read_input_text(path: str | os.PathLike, what: str, error: type[Exception],

@@ -2,6 +2,8 @@
 // Written from the pbrt-v4 file-format documentation (pbrt.org/fileformat-v4).
 #include <pbrt/parser.h>
 
+#include <pbrt/util/file.h>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -45,7 +47,8 @@ bool HasSuffix(const std::string &s, const char *suffix) {
 }
 
 // The whole file in memory (the tokenizer then works on views into it). `from` is where the
-// file was asked for (an Include), or null for a file named on the command line.
+// file was asked for (an Include), or null for a file named on the command line. Regular
+// files only (a device or FIFO is refused before a byte is read, design §5.5).
 std::string ReadSceneFile(const std::string &path, const FileLoc *from) {
     auto fail = [&](const std::string &why) -> PbrtError {
         std::string msg = "\"" + path + "\": " + why;
@@ -53,18 +56,11 @@ std::string ReadSceneFile(const std::string &path, const FileLoc *from) {
     };
     if (HasSuffix(path, ".gz"))
         throw fail("gzip-compressed scene files are not supported; decompress it first");
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw fail("is a directory, not a scene file");
-    if (!std::filesystem::exists(path, ec)) throw fail("no such scene file");
-    if (!IsRegularFile(path)) throw fail("not a regular file");
-    // One read of the whole file (far faster than a character iterator on big meshes).
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) throw fail("cannot open scene file");
-    std::string text(size_t(in.tellg()), '\0');
-    in.seekg(0);
-    if (!in.read(text.data(), std::streamsize(text.size())))
-        throw fail("error reading scene file");
-    return text;
+    try {
+        return ReadRegularFile(path, "scene");
+    } catch (const FileReadError &e) {
+        throw fail(e.what());
+    }
 }
 
 }  // namespace
