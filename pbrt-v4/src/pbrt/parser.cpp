@@ -220,6 +220,9 @@ class TokenStream {
     }
     FileLoc Loc(const Token &t) const { return tokenizer.Loc(t); }
     const std::string &Filename() const { return tokenizer.Filename(); }
+    // Whether the file has begun with a directive: only then do error messages quote its
+    // text (see Dispatcher::Parse).
+    bool sceneText = false;
 
   private:
     Tokenizer tokenizer;
@@ -491,9 +494,35 @@ void Dispatcher::PopScope(TokenStream &ts, const Token &directive, char kind) {
     scopes.pop_back();
 }
 
+// The directives of the format (those Parse dispatches on).
+bool IsDirective(std::string_view d) {
+    static const char *const names[] = {
+        "Shape", "Material", "MakeNamedMaterial", "LightSource", "AreaLightSource", "Camera",
+        "Film", "Sampler", "PixelFilter", "Integrator", "Accelerator", "MakeNamedMedium",
+        "AttributeBegin", "AttributeEnd", "NamedMaterial", "Texture", "Translate", "Scale",
+        "Rotate", "LookAt", "Transform", "ConcatTransform", "Identity", "CoordinateSystem",
+        "CoordSysTransform", "ActiveTransform", "TransformTimes", "ReverseOrientation",
+        "WorldBegin", "Attribute", "ObjectBegin", "ObjectEnd", "ObjectInstance", "ColorSpace",
+        "Option", "MediumInterface", "Include", "Import", "TransformBegin", "TransformEnd",
+        "WorldEnd"};
+    for (const char *n : names)
+        if (d == n) return true;
+    return false;
+}
+
 void Dispatcher::Parse(TokenStream &ts, int depth) {
     Token t;
     while (ts.Next(&t)) {
+        // A file is scene text once it begins with a directive; one that does not (a system
+        // file an Include names, a binary file) is refused at its first token, naming the file
+        // and the line but not quoting its content, which an error message could otherwise
+        // disclose (design §5.5). Comments and white space before the first directive are fine.
+        if (!ts.sceneText) {
+            if (t.IsQuoted() || !IsDirective(t.text))
+                throw PbrtError(ts.Loc(t), "not a pbrt-v4 scene file: it does not begin with a "
+                                           "directive (its content is not shown)");
+            ts.sceneText = true;
+        }
         if (t.IsQuoted() || t.IsOpenBracket() || t.IsCloseBracket()) {
             const char *why = t.IsQuoted() ? "expected a directive, got the string "
                                            : "mismatched brackets: expected a directive, got ";
