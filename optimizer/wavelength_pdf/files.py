@@ -54,15 +54,19 @@ def read_regular_file(path: str | os.PathLike, what: str,
     except OSError as e:
         raise InputFileError(path, f"cannot read ({e.strerror})") from None
     too_large = f"larger than {(max_bytes or 0) >> 20} MiB, not a {what} file"
+    # The descriptor's kind first: a file object cannot even be made of a directory's.
+    st = os.fstat(fd)
+    reason = ""
+    if stat.S_ISDIR(st.st_mode):
+        reason = f"is a directory, not a {what} file"
+    elif not stat.S_ISREG(st.st_mode):
+        reason = f"not a regular file (a device, FIFO or socket), not a {what} file"
+    elif max_bytes is not None and st.st_size > max_bytes:
+        reason = too_large
+    if reason:
+        os.close(fd)
+        raise InputFileError(path, reason)
     with os.fdopen(fd, "rb") as fh:
-        st = os.fstat(fd)
-        if stat.S_ISDIR(st.st_mode):
-            raise InputFileError(path, f"is a directory, not a {what} file")
-        if not stat.S_ISREG(st.st_mode):
-            raise InputFileError(path, f"not a regular file (a device, FIFO or socket), not a "
-                                       f"{what} file")
-        if max_bytes is not None and st.st_size > max_bytes:
-            raise InputFileError(path, too_large)
         try:
             data = fh.read() if max_bytes is None else fh.read(max_bytes + 1)
         except OSError as e:

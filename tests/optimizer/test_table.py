@@ -239,3 +239,9 @@ def test_written_file_has_ordinary_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_directory_is_named_as_such(tmp_path):
+    with pytest.raises(TableError) as e:
+        read_table(tmp_path)
+    assert str(e.value) == f"{tmp_path}: is a directory, not a table file"
