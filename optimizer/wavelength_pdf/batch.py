@@ -20,6 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from wavelength_pdf.coverage import check_range
 from wavelength_pdf.produce import optimize_one
 from wavelength_pdf.result import SUMMARY_FIELDS, Result
 from wavelength_pdf.spectra import SpectrumError, load_spectra
@@ -90,6 +91,7 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
         sp = load_spectra(spec, lo=lo, hi=hi)
         if len(sp) != 1:
             raise SpectrumError(f"{spec}: expected one spectrum, got {len(sp)}")
+        check_range(sp[0], lo, hi)  # light beyond the table's ends (design §3.3)
         grid = job["grid"] if isinstance(job["grid"], str) else np.asarray(job["grid"])
         o = optimize_one(sp[0], out, grid, job["solver"], job["seed"], job["max_seconds"], None,
                          max_evals=job.get("max_evals"))

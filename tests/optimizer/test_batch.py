@@ -98,3 +98,19 @@ def test_interrupted_batch_stops_its_workers_at_once(tmp_path):
     assert proc.returncode == 130, proc.stderr.read().decode(errors="replace")
     assert time.monotonic() - t0 < 20, "the batch waited for its workers' jobs"
     _assert_gone(workers)
+
+
+def test_batch_refuses_a_lamp_beyond_the_table_end_before_optimizing(tmp_path):
+    """The rule of optimize (design §3.3) in batch: an error row, no table, no optimization."""
+    from wavelength_pdf.batch import run_batch
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "red-edge.spd").write_text("".join(f"{760 + i / 10} 1\n" for i in range(401)))
+    rows, _ = run_batch(folder, tmp_path / "out", lo=380.0, hi=780.0, grid="auto", solver=None,
+                        seed=0)
+    (row,) = rows
+    assert row["status"] == "error", row
+    assert "outside the table's range [380, 780] nm" in row["message"], row
+    assert "--range 380 800" in row["message"], row
+    assert not (tmp_path / "out" / "red-edge.csv").exists()
