@@ -15,7 +15,12 @@ scene (the Cornell box with a glass sphere of spectral index ``glass-F11``):
     its own) is lower with the table than with upstream's visible sampling at equal spp;
 (d) (b) and (c) with ``--wavefront`` (against the same CPU truth: path, volpath and bdpt
     share one expectation);
-(e) the dispersive scene stays unbiased ((b) on it).
+(e) the dispersive scene stays unbiased ((b) on it);
+(f) ``--wavelength-sampling emission`` (a table built from the scene's own lamps, design §1.7)
+    converges to upstream's image too, CPU and ``--wavefront`` ((b) with it; its CIEDE2000 is
+    reported beside the table's);
+(g) bad lights with emission sampling (a blackbody of 0 K, lights of zero power) stop the
+    patched binary before rendering with ``FILE:LINE:COL: reason`` and exit status 1.
 Then the acceptance figure: on the Cornell box under 2482 at 256 spp, the error ratio
 uniform / table for patched upstream (upstream's uniform sampling is its "spectral" film on
 380..780 nm, four stratified wavelengths) and for this repository's ``pbrt``.
@@ -207,10 +212,11 @@ def main() -> int:
         rows.append(f"| {name} | {cells[0]} | {cells[1]} |")
         say(f"(a) {name}: {cells}")
 
-    # (b)-(e): seeds of visible (unpatched) and table (patched), CPU and wavefront.
+    # (b)-(f): seeds of visible (unpatched), table and emission (patched), CPU and wavefront.
+    emission = ["--wavelength-sampling", "emission"]
     res_rows = ["| scene | mode | mean RGB upstream | mean RGB table | SE of the difference, % (R G B) | max abs z "
-                "| ΔE visible | ΔE table | visible/table |",
-                "|---|---|---|---|---|---|---|---|---|"]
+                "| ΔE visible | ΔE table | visible/table | (f) max abs z emission | ΔE emission |",
+                "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, scene in scenes.items():
         truth = cache.render(pa, scene, ["--spp", str(args.truth_spp), "--seed", "100000", *table])
         for mode in ([], ["--wavefront"]):
@@ -225,15 +231,43 @@ def main() -> int:
             zmax = float(np.max(np.abs(z)))
             ev, _ = mean_delta_e(vis, truth)
             et, _ = mean_delta_e(tab, truth)
+            emi = [cache.render(pa, scene, ["--spp", str(args.spp), "--seed", str(s), *mode, *emission])
+                   for s in range(1, args.seeds + 1)]
+            me, se_ = pooled_mean(emi)
+            zemax = float(np.max(np.abs((me - mv) / np.sqrt(sv ** 2 + se_ ** 2))))
+            ee, _ = mean_delta_e(emi, truth)
             tag = "(e)" if name == DISPERSIVE else ("(b)" if not mode else "(d)")
             if not zmax < Z_LIMIT:
                 failures.append(f"{tag} {name} {label}: image means differ, max |z| = {zmax:.2f}")
+            if not zemax < Z_LIMIT:
+                failures.append(f"(f) {name} {label}: emission sampling's image mean differs, max |z| = {zemax:.2f}")
             if name != DISPERSIVE and not et < ev:
                 failures.append(f"(c) {name} {label}: ΔE table {et:.3f} not below visible {ev:.3f}")
             fmt = lambda m: " ".join(f"{x:.4g}" for x in m)  # noqa: E731
             res_rows.append(f"| {name} | {label} | {fmt(mv)} | {fmt(mt)} | {precision(mv, sv, st)} | {zmax:.2f} | "
-                            f"{ev:.3f} | {et:.3f} | {ev / et:.2f} |")
-            say(f"(b-e) {name} {label}: z {zmax:.2f}, ΔE {ev:.3f} vs {et:.3f}")
+                            f"{ev:.3f} | {et:.3f} | {ev / et:.2f} | {zemax:.2f} | {ee:.3f} |")
+            say(f"(b-f) {name} {label}: z {zmax:.2f} (emission {zemax:.2f}), ΔE {ev:.3f} vs {et:.3f} "
+                f"(emission {ee:.3f})")
+
+    # (g) bad lights with emission sampling: an error naming the light, before rendering.
+    bad_rows = ["| (g) bad light | exit status | message |", "|---|---|---|"]
+    head = scenes["cornell-box"].read_text().split("WorldBegin")[0] + "WorldBegin\n"
+    for label, world, want in (
+            ("blackbody of 0 K", 'AttributeBegin\nAreaLightSource "diffuse" "blackbody L" [0]\n'
+                                 'Shape "sphere"\nAttributeEnd\n', "emitted power is"),
+            ("zero power", 'LightSource "point" "float scale" [0]\n', "emits between 360 and 830 nm")):
+        bad = args.work / "scenes" / "bad" / f"{label.split()[0]}.pbrt"
+        bad.parent.mkdir(parents=True, exist_ok=True)
+        bad.write_text(head + world)
+        line = head.count("\n") + (2 if world.startswith("AttributeBegin") else 1)
+        proc = subprocess.run([str(pa.binary), "--quiet", *emission, "--outfile", str(bad.with_suffix(".exr")),
+                               str(bad)], capture_output=True, text=True)
+        msg = (proc.stderr.strip().splitlines() or [""])[-1]
+        ok = proc.returncode == 1 and f"{bad}:{line}:" in msg and want in msg and not bad.with_suffix(".exr").exists()
+        bad_rows.append(f"| {label} | {proc.returncode} | {msg[:160]} |")
+        if not ok:
+            failures.append(f"(g) {label}: expected exit 1 naming {bad}:{line}, got {proc.returncode}: {msg}")
+        say(f"(g) {label}: {proc.returncode} {msg}")
 
     # The acceptance figure: uniform / table at 256 spp, Cornell box under 2482.
     lamp = load_spectrum(str(args.shared / "spectra" / "lspdd" / f"{LAMP}.csv"), lo=380.0, hi=780.0)
@@ -242,27 +276,31 @@ def main() -> int:
                     resolution=(args.ratio_size, args.ratio_size))
     cb_spectral = spectral_film_copy(cb)
     seeds = range(1, 4)
-    ratio_rows = ["| renderer | ΔE uniform | ΔE visible | ΔE table | uniform/table | visible/table |",
-                  "|---|---|---|---|---|---|"]
+    ratio_rows = ["| renderer | ΔE uniform | ΔE visible | ΔE table | ΔE emission | uniform/table | visible/table "
+                  "| visible/emission |",
+                  "|---|---|---|---|---|---|---|---|"]
     spp = ["--spp", str(args.ratio_spp)]
     truth = cache.render(pa, cb, ["--spp", str(args.ratio_truth_spp), "--seed", "100000", *table])
     uni = [cache.render(up, cb_spectral, [*spp, "--seed", str(s)]) for s in seeds]
     vis = [cache.render(up, cb, [*spp, "--seed", str(s)]) for s in seeds]
     tab = [cache.render(pa, cb, [*spp, "--seed", str(s), *table]) for s in seeds]
-    (eu, su), (ev, sv), (et, st) = (mean_delta_e(x, truth) for x in (uni, vis, tab))
+    emi = [cache.render(pa, cb, [*spp, "--seed", str(s), *emission]) for s in seeds]
+    (eu, su), (ev, sv), (et, st), (ee, se_) = (mean_delta_e(x, truth) for x in (uni, vis, tab, emi))
     up_ratio = eu / et
     # (b) once more, with 32 times the samples per pixel of the scene rows above.
-    (mu, seu), (mv, sev), (mt, set_) = (pooled_mean(x) for x in (uni, vis, tab))
+    (mu, seu), (mv, sev), (mt, set_), (me, see) = (pooled_mean(x) for x in (uni, vis, tab, emi))
     z_rows = ["| upstream sampler | mean RGB upstream | mean RGB table | SE of the difference, % (R G B) | max abs z |",
               "|---|---|---|---|---|"]
-    for label, m, se in (("uniform (spectral film)", mu, seu), ("visible", mv, sev)):
-        zmax = float(np.max(np.abs((mt - m) / np.sqrt(se ** 2 + set_ ** 2))))
-        z_rows.append(f"| {label} | {' '.join(f'{x:.4g}' for x in m)} | {' '.join(f'{x:.4g}' for x in mt)} | "
-                      f"{precision(m, se, set_)} | {zmax:.2f} |")
+    for label, m, se, mp, sp_ in (("uniform (spectral film)", mu, seu, mt, set_), ("visible", mv, sev, mt, set_),
+                                  ("visible, against emission", mv, sev, me, see)):
+        zmax = float(np.max(np.abs((mp - m) / np.sqrt(se ** 2 + sp_ ** 2))))
+        z_rows.append(f"| {label} | {' '.join(f'{x:.4g}' for x in m)} | {' '.join(f'{x:.4g}' for x in mp)} | "
+                      f"{precision(m, se, sp_)} | {zmax:.2f} |")
         if not zmax < Z_LIMIT:
             failures.append(f"(b) cornell-ratio {label}: image means differ, max |z| = {zmax:.2f}")
     ratio_rows.append(f"| patched upstream pbrt-v4 | {eu:.3f} ± {su:.3f} | {ev:.3f} ± {sv:.3f} | "
-                      f"{et:.3f} ± {st:.3f} | {eu / et:.2f} | {ev / et:.2f} |")
+                      f"{et:.3f} ± {st:.3f} | {ee:.3f} ± {se_:.3f} | {eu / et:.2f} | {ev / et:.2f} | "
+                      f"{ev / ee:.2f} |")
     repo_ratio = None
     if args.repo_pbrt.is_file():
         rp = Renderer.of("repo", args.repo_pbrt)
@@ -271,10 +309,12 @@ def main() -> int:
                                       "--wavelength-range", "380", "780"]) for s in seeds]
         rvis = [cache.render(rp, cb, [*spp, "--seed", str(s)]) for s in seeds]
         rtab = [cache.render(rp, cb, [*spp, "--seed", str(s), *table]) for s in seeds]
-        (ru, rsu), (rv, rsv), (rt, rst) = (mean_delta_e(x, rtruth) for x in (runi, rvis, rtab))
+        remi = [cache.render(rp, cb, [*spp, "--seed", str(s), *emission]) for s in seeds]
+        (ru, rsu), (rv, rsv), (rt, rst), (re_, rse) = (mean_delta_e(x, rtruth) for x in (runi, rvis, rtab, remi))
         repo_ratio = ru / rt
         ratio_rows.append(f"| this repository's pbrt | {ru:.3f} ± {rsu:.3f} | {rv:.3f} ± {rsv:.3f} | "
-                          f"{rt:.3f} ± {rst:.3f} | {ru / rt:.2f} | {rv / rt:.2f} |")
+                          f"{rt:.3f} ± {rst:.3f} | {re_:.3f} ± {rse:.3f} | {ru / rt:.2f} | {rv / rt:.2f} | "
+                          f"{rv / re_:.2f} |")
         if not up_ratio >= repo_ratio:
             failures.append(f"ratio: patched upstream's uniform/table {up_ratio:.2f} below this "
                             f"repository's {repo_ratio:.2f}")
@@ -284,9 +324,10 @@ def main() -> int:
     print(f"\nwavelength-pdf patch check: {len(scenes)} scenes at most {args.size} px a side, lamp LSPDD "
           f"{LAMP} (380..780 nm), table {args.table.name}")
     print("\n".join(rows))
-    print(f"\n(b)-(e): {args.seeds} seeds x {args.spp} spp per method; truth: patched + table, "
+    print(f"\n(b)-(f): {args.seeds} seeds x {args.spp} spp per method; truth: patched + table, "
           f"{args.truth_spp} spp; |z| < {Z_LIMIT:g} passes")
     print("\n".join(res_rows))
+    print("\n" + "\n".join(bad_rows))
     print(f"\nCornell box under LSPDD {LAMP}, {args.ratio_size}x{args.ratio_size}, {args.ratio_spp} spp, "
           f"3 seeds, truth {args.ratio_truth_spp} spp with the table (each renderer its own)")
     print("\n".join(ratio_rows))

@@ -86,7 +86,7 @@ TABLE="$WORK/check/table-2482.csv"
 mkdir -p "$WORK/check"
 if [ ! -f "$TABLE" ]; then
     echo "== optimizing a table for LSPDD 2482"
-    PYTHONPATH="$REPO/optimizer" "$PYTHON" -m wavelength_pdf.cli optimize "$SHARED/spectra/lspdd/2482.csv" -o "$TABLE.tmp.csv"
+    PYTHONPATH="$REPO/optimizer" "$PYTHON" -m wavelength_pdf optimize "$SHARED/spectra/lspdd/2482.csv" -o "$TABLE.tmp.csv"
     mv "$TABLE.tmp.csv" "$TABLE"
 fi
 

@@ -5,10 +5,16 @@ with awkward features, samples it with that module's public functions only, and 
 
 - ``vectors-table.csv``: the table, in the commented CSV layout of design §2;
 - ``vectors.csv``: one row per u with the four wavelengths lambda_k = F_k^-1(u) [nm] and the
-  four mixture densities (1/4) sum_k p_k(lambda_j) [1/nm] that Python computes.
+  four mixture densities (1/4) sum_k p_k(lambda_j) [1/nm] that Python computes;
+- ``equal-mass-inputs.csv`` and ``equal-mass-tables.csv``: weights q at nodes x with awkward
+  features (lines narrower than the 0.01 nm hand-over step, zero stretches, a single segment,
+  spikes at the ends and on a node, values spanning the 1e-300 floor, a lamp times
+  xbar + ybar + zbar), and the tables ``wavelength_pdf.stratified.equal_mass_table`` (the
+  reference of design §1.7) builds from them.
 
-The C++ test ``patches/tests/wavelength_table_test.cpp`` reads both and must agree to 1e-5
-relative; ``tests/test_vectors.py`` regenerates them and checks that they equal the committed
+The C++ test ``patches/tests/wavelength_table_test.cpp`` reads them; the sampler must agree to
+1e-5 relative, ``wavelength_table::EqualMassTable`` to 1e-12 (same grid, same densities).
+``tests/test_vectors.py`` regenerates every file and checks that they equal the committed
 files, so neither side can drift unnoticed.
 
 Usage::
@@ -24,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from wavelength_pdf import sampling
+from wavelength_pdf.precision import float64
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "patches" / "tests" / "data"
@@ -31,6 +38,10 @@ TABLE_NAME = "vectors-table.csv"
 VECTORS_NAME = "vectors.csv"
 VECTORS_HEADER = ("u,lambda0,lambda1,lambda2,lambda3,"
                   "mixture_pdf0,mixture_pdf1,mixture_pdf2,mixture_pdf3")
+EQUAL_MASS_INPUTS_NAME = "equal-mass-inputs.csv"
+EQUAL_MASS_TABLES_NAME = "equal-mass-tables.csv"
+EQUAL_MASS_INPUTS_HEADER = "case,x_nm,q"
+EQUAL_MASS_TABLES_HEADER = "case,lambda_nm,pdf0,pdf1,pdf2,pdf3"
 
 
 def awkward_table() -> tuple[np.ndarray, np.ndarray]:
@@ -73,8 +84,71 @@ def vector_us(grid: np.ndarray, pdfs: np.ndarray) -> np.ndarray:
     return np.unique(u)  # sorted, without repeats (many CDFs share 0 and 1)
 
 
-def write_vectors(out_dir: Path) -> tuple[Path, Path]:
-    """Write ``vectors-table.csv`` and ``vectors.csv`` into ``out_dir``; return their paths."""
+def equal_mass_cases() -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(what, x, q) inputs of the equal-mass construction (design §1.7) that break it if any
+    rule of the construction is done differently."""
+    cases = [
+        ("a 0.004 nm line holding all the mass: three cuts inside it, steps shortened",
+         [380.0, 549.998, 550.0, 550.002, 780.0], [0.0, 0.0, 1.0, 0.0, 0.0]),
+        ("a spike on a node between 0.001 nm segments: two cuts on the node, an empty band",
+         [380.0, 499.999, 500.0, 500.001, 780.0], [0.0, 0.0, 1.0, 0.0, 0.0]),
+        ("zero tails and an interior zero stretch, steep 0.02 nm and 0.01 nm edges",
+         [380.0, 420.0, 420.02, 430.0, 480.0, 480.5, 520.0, 600.0, 600.01, 700.0, 780.0],
+         [0.0, 0.0, 2.0, 2.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0]),
+        ("a single flat segment (stratified uniform)", [380.0, 780.0], [1.0, 1.0]),
+        ("a single rising segment (cuts on a quadratic)", [360.0, 830.0], [0.0, 2.0]),
+        ("a spike at the left end holding 85 % of the mass",
+         [380.0, 380.004, 500.0, 780.0], [1e6, 0.0, 1.0, 1.0]),
+        ("a spike at the right end", [380.0, 600.0, 779.997, 780.0], [1.0, 1.0, 0.0, 4e5]),
+        ("values across the 1e-300 floor, scaled from a 1e300 peak",
+         [380.0, 400.0, 420.0, 440.0, 460.0, 480.0], [1e300, 1e-10, 1e-310, 0.0, 3e299, 2e290]),
+        ("cuts on nodes of a staircase", [380.0, 480.0, 580.0, 680.0, 780.0],
+         [1.0, 1.0, 1.0, 1.0, 1.0]),
+    ]
+    out = [(what, np.asarray(x, dtype=np.float64), np.asarray(q, dtype=np.float64))
+           for what, x, q in cases]
+    # A lamp of lines on a continuum times xbar + ybar + zbar on 360-830 nm, as the renderer's
+    # emission sampling builds it (design §1.7: the union of the spectrum's and the CMFs' nodes).
+    from wavelength_pdf.spectra import read_spd
+    from wavelength_pdf.stratified import weighted_spectrum
+
+    lamp = read_spd(REPO / "spectra" / "tri-band-fluorescent.spd", lo=None, hi=None)
+    x, q = weighted_spectrum(lamp, "xyz", 360.0, 830.0)
+    out.append(("the tri-band lamp times xbar + ybar + zbar on 360-830 nm", x, q))
+    return out
+
+
+def write_equal_mass_vectors(out_dir: Path) -> tuple[Path, Path]:
+    """Write ``equal-mass-inputs.csv`` and ``equal-mass-tables.csv``; return their paths."""
+    from wavelength_pdf.stratified import equal_mass_table
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    head = ["# Test vectors of the equal-mass construction (design §1.7), written by",
+            "# scripts/make_test_vectors.py from optimizer/wavelength_pdf/stratified.py (the",
+            "# reference). Do not edit by hand."]
+    inputs = [*head, "# Weights q at nodes x [nm], linear between them; one case per number:"]
+    tables = [*head, f"# The tables equal_mass_table(x, q) builds from {EQUAL_MASS_INPUTS_NAME}:",
+              "# grid [nm] and four normalized densities [1/nm] per case."]
+    cases = equal_mass_cases()
+    inputs += [f"#   {c}: {what}" for c, (what, _, _) in enumerate(cases)]
+    inputs.append(EQUAL_MASS_INPUTS_HEADER)
+    tables.append(EQUAL_MASS_TABLES_HEADER)
+    for c, (_, x, q) in enumerate(cases):
+        inputs += [f"{c},{float(a)!r},{float(b)!r}" for a, b in zip(x, q)]
+        t = equal_mass_table(x, q)
+        for i in range(t.grid.size):
+            tables.append(",".join([str(c)] + [repr(float(v)) for v in (t.grid[i], *t.pdfs[:, i])]))
+    paths = out_dir / EQUAL_MASS_INPUTS_NAME, out_dir / EQUAL_MASS_TABLES_NAME
+    for path, lines in zip(paths, (inputs, tables)):
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return paths
+
+
+@float64  # the reference samples in float64 (run as a script, JAX would default to float32)
+def write_vectors(out_dir: Path) -> tuple[Path, ...]:
+    """Write ``vectors-table.csv``, ``vectors.csv`` and the equal-mass vectors into
+    ``out_dir``; return their paths."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     grid, pdfs = awkward_table()
@@ -96,7 +170,7 @@ def write_vectors(out_dir: Path) -> tuple[Path, Path]:
         lines.append(",".join(repr(float(v)) for v in values))
     vectors_path = out_dir / VECTORS_NAME
     vectors_path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return table_path, vectors_path
+    return (table_path, vectors_path, *write_equal_mass_vectors(out_dir))
 
 
 def _write_table(path: Path, grid: np.ndarray, pdfs: np.ndarray) -> None:
@@ -117,7 +191,8 @@ def _write_table(path: Path, grid: np.ndarray, pdfs: np.ndarray) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out-dir", type=Path, default=DEFAULT_OUT,
-                        help=f"where to write {TABLE_NAME} and {VECTORS_NAME} "
+                        help=f"where to write {TABLE_NAME}, {VECTORS_NAME} and the "
+                             f"equal-mass vectors "
                              f"(default: {DEFAULT_OUT.relative_to(REPO)})")
     args = parser.parse_args(argv)
     for path in write_vectors(args.out_dir):

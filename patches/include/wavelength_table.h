@@ -414,6 +414,10 @@ inline Table Build(std::vector<double> grid, std::array<std::vector<double>, kNu
     for (int k = 0; k < kNumDensities; ++k) {
         for (std::size_t i = 0; i < n; ++i) {
             const double v = values[k][i];
+            if (std::isfinite(v) && v >= 0)
+                continue;
+            // The message only for a bad value (formatting costs microseconds a value, which
+            // a table built in memory at scene load would pay for every node).
             const std::string what = "pdf" + std::to_string(k) + " is ";
             const std::string where = " at " + FormatDigits(grid[i], 6) + " nm";
             if (std::isnan(v))
@@ -873,6 +877,273 @@ inline std::vector<std::pair<double, double>> ZeroMixtureIntervals(const Table &
             out.emplace_back(t.grid[i], t.grid[i + 1]);
     }
     return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Stratified tables without an optimizer: four equal-mass bands of a weight (design §1.7).
+// ---------------------------------------------------------------------------------------
+
+// Width of the step over which a density hands over to the next at a cut [nm].
+constexpr double kCutWidthNm = 0.01;
+
+namespace detail {
+
+// numpy.interp(x, xp, fp, left, right) for strictly increasing xp (the same arithmetic, so
+// that a table built here has the bits of the Python reference's wherever the compiler keeps
+// the operations apart).
+inline double Interp(const std::vector<double> &xp, const std::vector<double> &fp, double x,
+                     double left, double right) {
+    const std::size_t n = xp.size();
+    if (x < xp.front())
+        return left;
+    if (x > xp.back())
+        return right;
+    const std::size_t j = std::size_t(std::upper_bound(xp.begin(), xp.end(), x) - xp.begin()) - 1;
+    if (j + 1 >= n || xp[j] == x)
+        return fp[j];
+    const double dy = fp[j + 1] - fp[j];
+    const double dx = xp[j + 1] - xp[j];
+    const double slope = dy / dx;
+    const double t = x - xp[j];
+    const double rise = slope * t;
+    return rise + fp[j];
+}
+
+// Trapezoid-rule integral of v over x, summed left to right.
+inline double Trapezoid(const std::vector<double> &x, const std::vector<double> &v) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i + 1 < x.size(); ++i) {
+        const double s = v[i + 1] + v[i];
+        const double mean = 0.5 * s;
+        const double width = x[i + 1] - x[i];
+        const double area = mean * width;
+        sum = sum + area;
+    }
+    return sum;
+}
+
+// g(a) = Q(a) + q(a) d(a) / 2 inside segment i at offset s from x[i] (design §1.7): the
+// mass of q up to a plus the half of the hand-over step that stays with the band before
+// the cut. One operation per statement, in the Python reference's order.
+inline double CutMass(double massI, double q0, double slope, double h, double s) {
+    const double halfSlope = 0.5 * slope;
+    const double a = halfSlope * s;
+    const double b = q0 + a;
+    const double integral = b * s;
+    const double left = massI + integral;
+    const double rise = slope * s;
+    const double qs = q0 + rise;
+    const double rest = h - s;
+    const double halfRest = 0.5 * rest;
+    const double d = kCutWidthNm < halfRest ? kCutWidthNm : halfRest;
+    const double stepMass = qs * d;
+    const double half = stepMass / 2.0;
+    return left + half;
+}
+
+}  // namespace detail
+
+// Four densities that cut the weight q into bands of equal mass (design §1.7; the Python
+// reference is wavelength_pdf.stratified.equal_mass_table, pinned to this by the test
+// vectors patches/tests/data/equal-mass-*.csv).
+//
+// x: nodes [nm], finite and strictly increasing, at least 2; q: the weight at the nodes,
+// finite and >= 0, linear between them, with a positive integral. Only q's shape matters:
+// it is scaled to a peak of 1, and values below 1e-300 of the peak count as 0.
+//
+// The table's grid is x plus, at each cut a_k (k = 1..3), the nodes a_k and a_k + d_k with
+// d_k = min(0.01 nm, half the gap to the next node of x) (shortened to half the distance to
+// the next cut when two cuts are closer than that). Density k is q on its band
+// [a_k + d_k, a_{k+1}] (band 0 starts at x.front(), band 3 ends at x.back()) and 0 at every
+// other node; density k - 1 falls to 0 over [a_k, a_k + d_k] while density k rises. The cuts
+// solve g(a_k) = k M / 4, g(a) = Q(a) + q(a) d(a) / 2 (Q the integral of q up to a, M its
+// total), so every density carries M / 4 before normalizing, and the mixture
+// (1/4) sum_k p_k equals q / M wherever q is linear between the nodes: the table
+// importance-samples q and stratifies it into four bands driven by one u. A band without
+// mass (a cut on a jump of g) takes q itself.
+//
+// Throws TableError("NAME: reason") for fewer than 2 nodes or a q of another length, nodes
+// that are not finite or not strictly increasing, a negative or non-finite q, or a q
+// without mass.
+inline Table EqualMassTable(const std::vector<double> &x, const std::vector<double> &qIn,
+                            const std::string &name = "equal-mass table") {
+    const std::size_t n = x.size();
+    if (n < 2 || qIn.size() != n)
+        throw TableError(name, 0,
+                         "need at least 2 nodes and one weight per node (got " +
+                             std::to_string(n) + " nodes and " + std::to_string(qIn.size()) +
+                             " weights)");
+    for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite(x[i]) || (i > 0 && !(x[i] > x[i - 1])))
+            throw TableError(name, 0,
+                             "nodes must be finite and strictly increasing (node " +
+                                 std::to_string(i) + " is " + detail::FormatNumber(x[i]) +
+                                 " nm)");
+    for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite(qIn[i]) || qIn[i] < 0)
+            throw TableError(name, 0,
+                             "the weight must be finite and non-negative (it is " +
+                                 detail::FormatNumber(qIn[i]) + " at " +
+                                 detail::FormatNumber(x[i]) + " nm)");
+    // Scaled to a peak of 1; values below 1e-300 of it read as 0 (design §3.3): a density
+    // normalized from them would underflow to 0 where q is not 0.
+    std::vector<double> q(qIn);
+    const double peak = *std::max_element(q.begin(), q.end());
+    if (peak > 0)
+        for (double &v : q) {
+            v = v / peak;
+            if (v < 1e-300)
+                v = 0.0;
+        }
+    std::vector<double> h(n - 1), mass(n, 0.0);
+    for (std::size_t i = 0; i + 1 < n; ++i) {
+        h[i] = x[i + 1] - x[i];
+        const double s = q[i + 1] + q[i];
+        const double mean = 0.5 * s;
+        const double seg = mean * h[i];
+        mass[i + 1] = mass[i] + seg;
+    }
+    const double total = mass[n - 1];
+    if (!(total > 0) || !std::isfinite(total))
+        throw TableError(name, 0,
+                         "the weight has no mass over " + detail::FormatDigits(x.front(), 6) +
+                             "-" + detail::FormatDigits(x.back(), 6) + " nm");
+
+    // The cuts: g jumps up at a node and increases inside a segment, so the segment is found
+    // among the node masses and the cut by bisection in it (a target in a jump: the node).
+    std::array<double, kNumDensities - 1> cuts{};
+    for (int k = 1; k < kNumDensities; ++k) {
+        const double scaled = total * double(k);
+        const double t = scaled / double(kNumDensities);
+        std::size_t i = std::size_t(std::upper_bound(mass.begin(), mass.end(), t) - mass.begin());
+        i = i == 0 ? 0 : i - 1;
+        if (i > n - 2)
+            i = n - 2;
+        const double halfGap = 0.5 * h[i];
+        const double d0 = kCutWidthNm < halfGap ? kCutWidthNm : halfGap;
+        const double stepMass = q[i] * d0;
+        const double gRight = mass[i] + stepMass / 2.0;  // g just right of x[i]
+        if (t <= gRight) {
+            cuts[k - 1] = x[i];
+            continue;
+        }
+        const double dq = q[i + 1] - q[i];
+        const double slope = dq / h[i];
+        double lo = 0.0, hi = h[i];
+        while (true) {
+            const double sum = lo + hi;
+            const double s = 0.5 * sum;
+            if (s <= lo || s >= hi)
+                break;
+            if (detail::CutMass(mass[i], q[i], slope, h[i], s) < t)
+                lo = s;
+            else
+                hi = s;
+        }
+        cuts[k - 1] = x[i] + hi;
+    }
+    // Where each band starts: after the hand-over step at its cut.
+    std::array<double, kNumDensities> starts{}, ends{};
+    starts[0] = x.front();
+    for (int k = 0; k < kNumDensities - 1; ++k) {
+        const double a = cuts[k];
+        const std::size_t j = std::size_t(std::upper_bound(x.begin(), x.end(), a) - x.begin());
+        double d = 0.0;
+        if (j < n) {
+            const double half = 0.5 * (x[j] - a);
+            d = kCutWidthNm < half ? kCutWidthNm : half;
+        }
+        if (k + 1 < kNumDensities - 1 && cuts[k + 1] > a) {
+            const double half = 0.5 * (cuts[k + 1] - a);
+            d = d < half ? d : half;
+        }
+        starts[k + 1] = a + d > a ? a + d : a;
+        ends[k] = a;
+    }
+    ends[kNumDensities - 1] = x.back();
+
+    std::vector<double> grid(x);
+    grid.insert(grid.end(), cuts.begin(), cuts.end());
+    grid.insert(grid.end(), starts.begin(), starts.end());
+    std::sort(grid.begin(), grid.end());
+    grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
+    std::vector<double> qg(grid.size());
+    for (std::size_t i = 0; i < grid.size(); ++i)
+        qg[i] = detail::Interp(x, q, grid[i], q.front(), q.back());
+    std::array<std::vector<double>, kNumDensities> values;
+    for (int k = 0; k < kNumDensities; ++k) {
+        std::vector<double> p(grid.size(), 0.0);
+        for (std::size_t i = 0; i < grid.size(); ++i)
+            if (grid[i] >= starts[k] && grid[i] <= ends[k])
+                p[i] = qg[i];
+        // A band without mass takes q itself (MakeTable normalizes every density).
+        values[k] = detail::Trapezoid(grid, p) > 0 ? std::move(p) : qg;
+    }
+    return MakeTable(std::move(grid), std::move(values), name);
+}
+
+// The nodes and values of q = s * w on [lo, hi] (wavelength_pdf.stratified.weighted_spectrum):
+// the union of lo, hi, the spectrum's nodes and the weight's nodes inside [lo, hi], with s and w
+// each linear between their own nodes and 0 outside them. An empty weight means w = 1 (and
+// adds no nodes): the spectrum alone, exactly. Throws TableError(name, ...) for a range that
+// is not finite with lo < hi, or nodes that are not strictly increasing.
+struct WeightedNodes {
+    std::vector<double> x, q;
+};
+inline WeightedNodes WeightedSpectrum(const std::vector<double> &spectrumNodes,
+                                      const std::vector<double> &spectrumValues,
+                                      const std::vector<double> &weightNodes,
+                                      const std::vector<double> &weightValues, double lo,
+                                      double hi, const std::string &name = "spectrum") {
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
+        throw TableError(name, 0,
+                         "the range must be finite with lo < hi, got " + detail::FormatNumber(lo) +
+                             "-" + detail::FormatNumber(hi) + " nm");
+    if (spectrumNodes.empty())
+        throw TableError(name, 0, "spectrum: no nodes");
+    auto check = [&](const std::vector<double> &nodes, const std::vector<double> &values,
+                     const char *what) {
+        if (nodes.size() != values.size())
+            throw TableError(name, 0, std::string(what) + ": need one value per node");
+        for (std::size_t i = 0; i < nodes.size(); ++i)
+            if (!std::isfinite(nodes[i]) || (i > 0 && !(nodes[i] > nodes[i - 1])))
+                throw TableError(name, 0,
+                                 std::string(what) + ": nodes must be finite and strictly increasing");
+    };
+    check(spectrumNodes, spectrumValues, "spectrum");
+    check(weightNodes, weightValues, "weight");
+    WeightedNodes out;
+    out.x = {lo, hi};
+    for (double v : spectrumNodes)
+        if (v >= lo && v <= hi)
+            out.x.push_back(v);
+    for (double v : weightNodes)
+        if (v >= lo && v <= hi)
+            out.x.push_back(v);
+    std::sort(out.x.begin(), out.x.end());
+    out.x.erase(std::unique(out.x.begin(), out.x.end()), out.x.end());
+    out.q.resize(out.x.size());
+    for (std::size_t i = 0; i < out.x.size(); ++i) {
+        double v = detail::Interp(spectrumNodes, spectrumValues, out.x[i], 0.0, 0.0);
+        if (!weightNodes.empty())
+            v = v * detail::Interp(weightNodes, weightValues, out.x[i], 0.0, 0.0);
+        out.q[i] = v;
+    }
+    return out;
+}
+
+// Stratified sampling of a spectrum times a weight on [lo, hi] as a table:
+// EqualMassTable of WeightedSpectrum (wavelength_pdf.stratified.stratified_table). With the
+// spectrum alone (empty weight) it is stratified sampling of the lamp; with the luminance
+// curve or xbar + ybar + zbar as the weight, of its luminance or its tristimulus sum.
+inline Table StratifiedTable(const std::vector<double> &spectrumNodes,
+                             const std::vector<double> &spectrumValues,
+                             const std::vector<double> &weightNodes,
+                             const std::vector<double> &weightValues, double lo, double hi,
+                             const std::string &name = "spectrum") {
+    const WeightedNodes w =
+        WeightedSpectrum(spectrumNodes, spectrumValues, weightNodes, weightValues, lo, hi, name);
+    return EqualMassTable(w.x, w.q, name);
 }
 
 }  // namespace wavelength_table

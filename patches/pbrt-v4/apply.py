@@ -3,9 +3,10 @@
 
     python3 patches/pbrt-v4/apply.py UPSTREAM_DIR [--check]
 
-The patched pbrt-v4 takes ``--wavelength-pdf TABLE.csv`` and ``--wavelength-pdf-defensive S``
-in its CPU integrators and its wavefront integrator (CPU and GPU); without them it renders
-what upstream renders. The edits are listed in ``edits.py``: each replaces an exact snippet
+The patched pbrt-v4 takes ``--wavelength-pdf TABLE.csv`` and ``--wavelength-pdf-defensive S``,
+and ``--wavelength-sampling emission`` with ``--emission-weight W`` (a table built from the
+scene's own lamps), in its CPU integrators and its wavefront integrator (CPU and GPU); without
+them it renders what upstream renders. The edits are listed in ``edits.py``: each replaces an exact snippet
 (an anchor) of upstream pbrt-v4 (commit 5f7a6068).
 
 Every anchor is checked before anything is written. When one is missing (another pbrt-v4

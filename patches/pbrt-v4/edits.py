@@ -84,11 +84,18 @@ EDITS = [
          "                                wavelength table (one u, exact inversion, balance\n"
          "                                heuristic over its four densities).\n"
          "  --wavelength-pdf-defensive <s> Mix a uniform share s in [0, 1] into each density\n"
-         "                                of the table (removes zero-density gaps).\n"),
+         "                                of the table (removes zero-density gaps).\n"
+         "  --wavelength-sampling <name>  emission: sample each camera path's wavelengths from\n"
+         "                                the scene's own lamps (their emitted power in four\n"
+         "                                equal-mass bands, built at scene load; for spiky\n"
+         "                                lamps). visible (default): upstream's sampling.\n"
+         "  --emission-weight <w>         With emission: spd (the power alone, default),\n"
+         "                                luminance (times ybar) or xyz (times x+y+z).\n"),
     Edit("src/pbrt/cmd/pbrt.cpp",
          "    bool format = false, toPly = false;\n",
          "    bool format = false, toPly = false;\n"
-         "    std::string wavelengthPdf, wavelengthPdfDefensive;  // " + MARKER + "\n"),
+         "    std::string wavelengthPdf, wavelengthPdfDefensive;  // " + MARKER + "\n"
+         "    std::string wavelengthSampling, emissionWeight;\n"),
     Edit("src/pbrt/cmd/pbrt.cpp",
          '            ParseArg(&iter, args.end(), "wavefront", &options.wavefront, onError) ||\n',
          '            ParseArg(&iter, args.end(), "wavefront", &options.wavefront, onError) ||\n'
@@ -96,12 +103,16 @@ EDITS = [
          + MARKER + "\n"
          "                     onError) ||\n"
          '            ParseArg(&iter, args.end(), "wavelength-pdf-defensive",\n'
-         "                     &wavelengthPdfDefensive, onError) ||\n"),
+         "                     &wavelengthPdfDefensive, onError) ||\n"
+         '            ParseArg(&iter, args.end(), "wavelength-sampling", &wavelengthSampling,\n'
+         "                     onError) ||\n"
+         '            ParseArg(&iter, args.end(), "emission-weight", &emissionWeight, onError) ||\n'),
     Edit("src/pbrt/cmd/pbrt.cpp",
          "    // Initialize pbrt\n    InitPBRT(options);\n",
          "    // Initialize pbrt\n    InitPBRT(options);\n"
          "    if (!format && !toPly && !options.upgrade)  // " + MARKER + "\n"
-         "        InitWavelengthTable(wavelengthPdf, wavelengthPdfDefensive);\n"),
+         "        InitWavelengthTable(wavelengthPdf, wavelengthPdfDefensive, wavelengthSampling,\n"
+         "                            emissionWeight);\n"),
     # ---- the warning for zero mixture density where a light emits --------------------
     Edit("src/pbrt/scene.cpp",
          "#include <pbrt/shapes.h>\n",
@@ -116,6 +127,48 @@ EDITS = [
          "int BasicScene::AddAreaLight(SceneEntity light) {\n"
          "    WarnUnsampledEmission(light.name, light.parameters, &light.loc);  // "
          + MARKER + "\n"),
+    # ---- --wavelength-sampling emission: where each light was defined, and the table ---
+    Edit("src/pbrt/scene.cpp",
+         "    lightJobs.push_back(RunAsync(create));\n}\n",
+         "    lightJobs.push_back(RunAsync(create));\n"
+         "    NoteLightSource(light.name, light.parameters, &light.loc);  // " + MARKER + "\n}\n"),
+    Edit("src/pbrt/scene.cpp",
+         "            if (area) {\n"
+         "                lights.push_back(area);\n"
+         "                shapeLights->push_back(area);\n"
+         "            }\n",
+         "            if (area) {\n"
+         "                lights.push_back(area);\n"
+         "                shapeLights->push_back(area);\n"
+         "                NoteAreaLight(area, areaLightEntity.parameters,  // " + MARKER + "\n"
+         "                              &areaLightEntity.loc);\n"
+         "            }\n"),
+    Edit("src/pbrt/scene.cpp",
+         "    for (auto &job : lightJobs)\n"
+         "        lights.push_back(job->GetResult());\n",
+         "    for (size_t job = 0; job < lightJobs.size(); ++job) {  // " + MARKER + "\n"
+         "        lights.push_back(lightJobs[job]->GetResult());\n"
+         "        NoteLightSourceCreated(job, lights.back());\n"
+         "    }\n"),
+    Edit("src/pbrt/cpu/render.cpp",
+         "#include <pbrt/cpu/render.h>\n",
+         "#include <pbrt/cpu/render.h>\n" + _INC),
+    Edit("src/pbrt/cpu/render.cpp",
+         "    std::unique_ptr<Integrator> integrator(\n"
+         "        parsedScene.CreateIntegrator(camera, sampler, accel, lights));\n",
+         "    std::unique_ptr<Integrator> integrator(\n"
+         "        parsedScene.CreateIntegrator(camera, sampler, accel, lights));\n"
+         "    // The lights are preprocessed (scene bounds): the emission table can be built.\n"
+         "    InitEmissionWavelengthTable(lights.data(), lights.size());  // " + MARKER + "\n"),
+    Edit("src/pbrt/wavefront/integrator.cpp",
+         "#include <pbrt/wavefront/integrator.h>\n",
+         "#include <pbrt/wavefront/integrator.h>\n" + _INC),
+    Edit("src/pbrt/wavefront/integrator.cpp",
+         "    for (Light light : allLights)\n"
+         "        light.Preprocess(aggregate->Bounds());\n",
+         "    for (Light light : allLights)\n"
+         "        light.Preprocess(aggregate->Bounds());\n"
+         "    InitEmissionWavelengthTable(allLights.data(), allLights.size());  // " + MARKER + "\n"),
     # ---- CPU integrators: every place that samples the film's wavelengths ------------
     Edit("src/pbrt/cpu/integrators.cpp",
          "#include <pbrt/cpu/integrators.h>\n",

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -992,4 +993,234 @@ TEST(WavelengthTable, AgreesWithThePythonSamplerOnTestVectors) {
     EXPECT_GE(rows, 20);
     EXPECT_TRUE(sawZero) << "the vectors must include u = 0";
     EXPECT_TRUE(sawNearOne) << "the vectors must include a u just below 1";
+}
+
+// ---------------------------------------------------------------------------------------
+// The equal-mass construction (design §1.7): EqualMassTable against the Python reference
+// (wavelength_pdf.stratified.equal_mass_table) on the vectors of scripts/make_test_vectors.py,
+// and its own properties.
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+// The numeric rows of a CSV file with '#' comments and one header line (checked).
+std::vector<std::vector<double>> ReadNumericCsv(const std::string &path, const std::string &header) {
+    std::ifstream in(path);
+    EXPECT_TRUE(in) << path << " is missing; run scripts/make_test_vectors.py";
+    std::vector<std::vector<double>> rows;
+    std::string line;
+    bool sawHeader = false;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#')
+            continue;
+        if (!sawHeader) {
+            EXPECT_EQ(line, header) << path;
+            sawHeader = true;
+            continue;
+        }
+        std::vector<double> row;
+        const char *p = line.c_str();
+        while (*p) {
+            char *end = nullptr;
+            row.push_back(std::strtod(p, &end));
+            EXPECT_NE(end, p) << path << ": " << line;
+            if (end == p)
+                break;
+            p = *end == ',' ? end + 1 : end;
+        }
+        rows.push_back(std::move(row));
+    }
+    return rows;
+}
+
+// The trapezoid-rule mass of q (linear between the nodes x) inside [a, b].
+double MassBetween(const std::vector<double> &x, const std::vector<double> &q, double a, double b) {
+    // Exact for a piecewise-linear q: integrate on the union of x and {a, b}.
+    std::vector<double> nodes{a, b};
+    for (double v : x)
+        if (v > a && v < b)
+            nodes.push_back(v);
+    std::sort(nodes.begin(), nodes.end());
+    double sum = 0;
+    for (size_t i = 0; i + 1 < nodes.size(); ++i) {
+        const double l = wt::detail::Interp(x, q, nodes[i], 0, 0);
+        const double r = wt::detail::Interp(x, q, nodes[i + 1], 0, 0);
+        sum += 0.5 * (l + r) * (nodes[i + 1] - nodes[i]);
+    }
+    return sum;
+}
+
+}  // namespace
+
+TEST(EqualMassTable, AgreesWithThePythonReferenceOnTestVectors) {
+    const std::string dir = WT_TEST_DATA_DIR;
+    const auto inputs = ReadNumericCsv(dir + "/equal-mass-inputs.csv", "case,x_nm,q");
+    const auto tables =
+        ReadNumericCsv(dir + "/equal-mass-tables.csv", "case,lambda_nm,pdf0,pdf1,pdf2,pdf3");
+    std::map<int, std::pair<std::vector<double>, std::vector<double>>> in;
+    for (const auto &r : inputs) {
+        ASSERT_EQ(r.size(), 3u);
+        in[int(r[0])].first.push_back(r[1]);
+        in[int(r[0])].second.push_back(r[2]);
+    }
+    std::map<int, std::vector<std::vector<double>>> want;
+    for (const auto &r : tables) {
+        ASSERT_EQ(r.size(), 6u);
+        want[int(r[0])].push_back(r);
+    }
+    ASSERT_GE(in.size(), 8u);
+    ASSERT_EQ(in.size(), want.size());
+    double worst = 0;
+    for (const auto &[c, xq] : in) {
+        const wt::Table t = wt::EqualMassTable(xq.first, xq.second, "case " + std::to_string(c));
+        const auto &w = want[c];
+        ASSERT_EQ(t.grid.size(), w.size()) << "case " << c << ": grid size";
+        std::array<double, 4> peak{};
+        for (const auto &r : w)
+            for (int k = 0; k < 4; ++k)
+                peak[k] = std::max(peak[k], r[2 + k]);
+        for (size_t i = 0; i < w.size(); ++i) {
+            EXPECT_PRED3(Agree, t.grid[i], w[i][1], 1e-12) << "case " << c << " node " << i;
+            worst = std::max(worst, std::abs(t.grid[i] - w[i][1]) / std::abs(w[i][1]));
+            for (int k = 0; k < 4; ++k) {
+                const double d = std::abs(t.pdf[k][i] - w[i][2 + k]) / peak[k];
+                worst = std::max(worst, d);
+                EXPECT_LE(d, 1e-12) << "case " << c << " node " << i << " (" << Num(t.grid[i])
+                                    << " nm): pdf" << k << " " << Num(t.pdf[k][i]) << " vs "
+                                    << Num(w[i][2 + k]);
+            }
+        }
+    }
+    std::printf("EqualMassTable vs Python: largest relative difference %.3g\n", worst);
+}
+
+TEST(EqualMassTable, BandsHaveEqualMassAndTheMixtureIsTheWeight) {
+    // Lines on a continuum, on an irregular grid.
+    std::vector<double> x, q;
+    for (double l = 380; l <= 780; l += 0.7) {
+        x.push_back(l);
+        double v = 0.02 + 0.001 * (l - 380) / 400;
+        for (auto [a, c] : {std::pair{1.0, 436.0}, {3.0, 546.1}, {2.0, 611.3}})
+            v += a * std::exp(-0.5 * std::pow((l - c) / 0.9, 2));
+        q.push_back(v);
+    }
+    const wt::Table t = wt::EqualMassTable(x, q);
+    const double M = MassBetween(x, q, x.front(), x.back());
+    for (int k = 0; k < 4; ++k) {
+        // Density k is q / m_k on its band, m_k the mass it carried before normalizing: every
+        // node where it alone is positive gives m_k = q / p_k, which must be M / 4.
+        int nodes = 0;
+        for (size_t i = 0; i < t.grid.size(); ++i) {
+            bool alone = t.pdf[k][i] > 0;
+            for (int j = 0; j < 4; ++j)
+                alone = alone && (j == k || t.pdf[j][i] == 0);
+            if (!alone)
+                continue;
+            ++nodes;
+            const double m = wt::detail::Interp(x, q, t.grid[i], 0, 0) / t.pdf[k][i];
+            EXPECT_NEAR(m / M, 0.25, 1e-12) << "density " << k << " at " << t.grid[i] << " nm";
+        }
+        EXPECT_GT(nodes, 10) << "density " << k;
+    }
+    // The mixture (1/4) sum_k p_k is q / M everywhere (q is linear between the nodes).
+    for (double l = 380; l <= 780; l += 0.013) {
+        const double want = wt::detail::Interp(x, q, l, 0, 0) / M;
+        EXPECT_NEAR(wt::MixturePdf(t, l), want, 1e-9 * want + 1e-15) << l << " nm";
+    }
+    // One u stratifies: lambda_k = F_k^-1(u) lies in band k, increasing with k.
+    for (double u : {0.001, 0.3, 0.77, 0.999}) {
+        double l[4], p[4];
+        wt::SampleFour(t, u, l, p);
+        for (int k = 1; k < 4; ++k)
+            EXPECT_LT(l[k - 1], l[k]) << "u=" << u;
+    }
+}
+
+TEST(EqualMassTable, UniformWeightIsFourEqualBands) {
+    const wt::Table t = wt::EqualMassTable({380, 780}, {3, 3});
+    for (double u : {0.0, 0.25, 0.5, 0.9}) {
+        double l[4], p[4];
+        wt::SampleFour(t, u, l, p);
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_NEAR(l[k], 380 + 100 * (k + u), 0.011) << "u=" << u << " k=" << k;
+            EXPECT_NEAR(p[k], 1.0 / 400, 1e-12);
+        }
+    }
+}
+
+TEST(EqualMassTable, PositiveMixtureWhereverTheWeightIsPositive) {
+    // Random weights with zero stretches: the mixture is never zero where q is not (the table
+    // is unbiased for anything q covers), and the densities are normalized.
+    std::mt19937_64 rng(29);
+    std::uniform_real_distribution<double> unit(0, 1);
+    for (int trial = 0; trial < 300; ++trial) {
+        const int n = 2 + int(unit(rng) * 40);
+        std::vector<double> x{380}, q;
+        for (int i = 1; i < n; ++i)
+            x.push_back(x.back() + (unit(rng) < 0.2 ? 0.001 : 0.01 + 30 * unit(rng)));
+        for (int i = 0; i < n; ++i)
+            q.push_back(unit(rng) < 0.4 ? 0.0 : std::pow(10.0, -6 + 12 * unit(rng)));
+        if (MassBetween(x, q, x.front(), x.back()) <= 0) {
+            EXPECT_THROW(wt::EqualMassTable(x, q), wt::TableError);
+            continue;
+        }
+        const wt::Table t = wt::EqualMassTable(x, q);
+        EXPECT_EQ(t.grid.front(), x.front());
+        EXPECT_EQ(t.grid.back(), x.back());
+        for (size_t i = 0; i < x.size(); ++i)
+            if (q[i] > 0)
+                EXPECT_GT(wt::MixturePdf(t, x[i]), 0) << "trial " << trial << " node " << i;
+        for (int k = 0; k < 4; ++k)
+            EXPECT_DOUBLE_EQ(t.cdf[k].back(), 1.0);
+    }
+}
+
+TEST(EqualMassTable, RefusesWhatThePythonReferenceRefuses) {
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::vector<std::pair<std::vector<double>, std::vector<double>>> bad = {
+        {{380}, {1}},                      // one node
+        {{380, 380}, {1, 1}},              // not increasing
+        {{380, 400}, {0, 0}},              // no mass
+        {{380, 400}, {1, -1}},             // negative
+        {{380, 400}, {1, std::nan("")}},   // NaN
+        {{380, inf}, {1, 1}},              // infinite node
+        {{380, 400, 420}, {1, 1}},         // one weight short
+    };
+    for (const auto &[x, q] : bad) {
+        try {
+            wt::EqualMassTable(x, q, "the lamp");
+            ADD_FAILURE() << "accepted a bad weight (" << x.size() << " nodes)";
+        } catch (const wt::TableError &e) {
+            EXPECT_EQ(std::string(e.what()).rfind("the lamp: ", 0), 0u) << e.what();
+            EXPECT_FALSE(e.reason().empty());
+        }
+    }
+}
+
+TEST(EqualMassTable, StratifiedTableWeighsTheSpectrumOnTheUnionOfNodes) {
+    // A spectrum on 5 nm nodes times a weight on 1 nm nodes: the table's grid holds both
+    // (inside the range), and its mixture is s * w normalized.
+    std::vector<double> sx, sv, wx, wv;
+    for (double l = 350; l <= 850; l += 5) {
+        sx.push_back(l);
+        sv.push_back(1 + std::sin(l / 17));
+    }
+    for (double l = 360; l <= 830; l += 1) {
+        wx.push_back(l);
+        wv.push_back(std::exp(-std::pow((l - 555) / 80, 2)));
+    }
+    const wt::WeightedNodes w = wt::WeightedSpectrum(sx, sv, wx, wv, 380, 780);
+    EXPECT_EQ(w.x.front(), 380);
+    EXPECT_EQ(w.x.back(), 780);
+    EXPECT_EQ(w.x.size(), 401u);  // every 1 nm node; the 5 nm nodes are among them
+    for (size_t i = 0; i < w.x.size(); ++i)
+        EXPECT_DOUBLE_EQ(w.q[i], wt::detail::Interp(sx, sv, w.x[i], 0, 0) *
+                                     wt::detail::Interp(wx, wv, w.x[i], 0, 0));
+    const wt::Table t = wt::StratifiedTable(sx, sv, wx, wv, 380, 780, "lamp");
+    const wt::Table u = wt::EqualMassTable(w.x, w.q, "lamp");
+    EXPECT_EQ(t.grid, u.grid);
+    // No weight: the spectrum alone, on its own nodes and the range's ends.
+    const wt::WeightedNodes s = wt::WeightedSpectrum(sx, sv, {}, {}, 381, 779);
+    EXPECT_EQ(s.x.size(), 79u + 2u);  // 385, 390, ..., 775 and the ends
+    EXPECT_THROW(wt::WeightedSpectrum(sx, sv, {}, {}, 500, 400), wt::TableError);
 }

@@ -75,6 +75,19 @@ def test_provenance_of_builtin_sampling(pbrt, tmp_path):
     np.testing.assert_allclose(h["wavelengthRange"], (360, 830))
 
 
+def test_provenance_of_emission_sampling(pbrt, tmp_path):
+    """--wavelength-sampling emission records its kind and weight, and no table file."""
+    for weight in ("spd", "xyz"):
+        h = read_header(render(pbrt, tmp_path, f"emission-{weight}", SCENE, "--wavelength-sampling",
+                               "emission", "--emission-weight", weight))
+        assert h["wavelengthSampler"] == "emission"
+        assert h["wavelengthEmissionWeight"] == weight
+        np.testing.assert_allclose(h["wavelengthRange"], (360, 830))
+        assert "wavelengthTable" not in h and "wavelengthTableSHA256" not in h
+    h = read_header(render(pbrt, tmp_path, "emission-default", SCENE, "--wavelength-sampling", "emission"))
+    assert h["wavelengthEmissionWeight"] == "spd"  # the default weight
+
+
 def test_read_header_rejects_what_is_not_exr(tmp_path):
     with pytest.raises(ImageError, match="no such image file"):
         read_header(tmp_path / "missing.exr")

@@ -92,7 +92,11 @@ def add_parser(sub) -> None:
                                    "table (design §1.7, §2), with no optimization: the samplers "
                                    "the benchmark compares every optimized table with "
                                    "(docs/benchmark.md). Methods: " +
-                                   "; ".join(f"{m}: {h}" for m, h in METHOD_HELP.items()) + ".")
+                                   "; ".join(f"{m}: {h}" for m, h in METHOD_HELP.items()) + ". "
+                                   "'spd SCENE.pbrt --whole-scene --range 360 830' writes the "
+                                   "table that pbrt --wavelength-sampling emission builds in "
+                                   "memory (pbrt --emission-table writes it too), for renderers "
+                                   "that only read tables.")
     b.add_argument("method", metavar="METHOD", choices=ALL_METHODS,
                    help="one of " + ", ".join(ALL_METHODS))
     b.add_argument("spectrum", metavar="SPECTRUM", nargs="?", default=None,

@@ -155,7 +155,14 @@ def add_parser(sub, names: list[str]) -> None:
                                    "write them as a table (design §2) with a comment header. "
                                    "A result that is not accepted (biased, a channel's std "
                                    "worse than the initialization's, or J worse than "
-                                   "stratified uniform sampling's) is not written (exit 1).")
+                                   "stratified uniform sampling's) is not written (exit 1). "
+                                   "Which to use when: for a spiky lamp, stratified sampling of "
+                                   "its own emission already gives most of the gain with nothing "
+                                   "to install (pbrt --wavelength-sampling emission; Mitsuba: "
+                                   "wavelength_pdf.mitsuba.emission_srf; the same table as a "
+                                   "file: wavelength-pdf baseline spd SCENE --whole-scene --range "
+                                   "360 830); an optimized table is the refinement, where the "
+                                   "benchmark (docs/benchmark.md) shows it pays.")
     o.add_argument("spectrum", metavar="SPECTRUM", help=SPECTRUM_HELP)
     o.add_argument("-o", "--output", required=True, metavar="TABLE",
                    help="output table (.csv); for a scene with several emitters, a "

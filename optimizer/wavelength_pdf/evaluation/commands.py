@@ -155,6 +155,10 @@ def add_subcommands(sub) -> None:
     _cluster(pub)
     pub.set_defaults(func=cmd_published)
 
+    from wavelength_pdf.evaluation.benchmark.command import add_parser as add_benchmark
+
+    add_benchmark(sub, OUT)
+
     d = sub.add_parser("demo", help="the main job: the project's Cornell box under its tri-band lamp "
                                     "(no ../shared needed)",
                        description="Optimizes a table for spectra/tri-band-fluorescent.spd, renders "

@@ -154,8 +154,9 @@ def cached(out: Path, key: str) -> Render | None:
 def render_key(scene: Path, sampler: Sampler, spp: int, seed: int, pbrt: Path | None = None) -> str:
     """The cache key of a render: the scene's, the binary's and the table's bytes, sampler, spp, seed."""
     pbrt = find_pbrt(pbrt)
-    inputs = [scene, pbrt] + ([Path(sampler.args[-1])] if sampler.name == "table" else [])
-    return file_digest(*inputs, extra=json.dumps([sampler.args, spp, seed]))
+    a = sampler.args
+    tables = [Path(a[i + 1]) for i, x in enumerate(a[:-1]) if x == "--wavelength-pdf"]
+    return file_digest(scene, pbrt, *tables, extra=json.dumps([sampler.args, spp, seed]))
 
 
 def temporary(path: Path) -> Path:

@@ -10,7 +10,11 @@ Usage::
                                           "srf": {"type": "wavelength_table", "filename": "t.csv"}}})
 
 In XML: ``<texture type="wavelength_table" name="srf"><string name="filename" value="t.csv"/>
-</texture>`` inside the ``<sensor>``. See :mod:`wavelength_pdf.mitsuba.texture` for why the plugin
+</texture>`` inside the ``<sensor>``.
+
+Emission sampling, no table file (design §1.7): ``scene_dict["sensor"]["srf"] =
+wpm.emission_srf(mi.load_dict(scene_dict))`` gives the sensor a ``wavelength_table`` built from
+the scene's own emitters (:mod:`wavelength_pdf.mitsuba.emission`). See :mod:`wavelength_pdf.mitsuba.texture` for why the plugin
 is a texture used as the sensor's ``srf``.
 
 Importing this package sets ``DRJIT_LIBLLVM_PATH`` to Debian's LLVM 19 when it is unset and the
@@ -25,11 +29,14 @@ from wavelength_pdf.mitsuba.llvm import ensure_llvm_path
 
 ensure_llvm_path()
 
+from wavelength_pdf.mitsuba.emission import (  # noqa: E402
+    EmissionError, emission_srf, emission_table, emitted_power)
 from wavelength_pdf.mitsuba.sampler import TableSampler, defensive_mixture  # noqa: E402
 from wavelength_pdf.mitsuba.texture import PLUGIN_NAME, texture_class  # noqa: E402
 
 __all__ = ["register", "registered_variants", "TableSampler", "defensive_mixture", "PLUGIN_NAME",
-           "texture_class", "ensure_llvm_path"]
+           "texture_class", "ensure_llvm_path", "emission_srf", "emission_table", "emitted_power",
+           "EmissionError"]
 
 _REGISTERED: set[str] = set()
 

@@ -12,8 +12,9 @@ table. The weight it returns is 1 / mixture pdf per lane; the film averages the 
 which makes the balance heuristic.
 
 Properties: ``filename`` (the table, read and validated by ``wavelength_pdf.table``; a bad
-table fails scene loading with ``FILE:LINE: reason``) and ``defensive`` (float in [0, 1],
-default 0: the uniform share of design §1).
+table fails scene loading with ``FILE:LINE: reason``) or ``table`` (the name of a table built
+in this process by ``wavelength_pdf.mitsuba.emission_srf``: emission sampling, design §1.7),
+and ``defensive`` (float in [0, 1], default 0: the uniform share of design §1).
 """
 from __future__ import annotations
 
@@ -51,11 +52,19 @@ def texture_class(m):
 
         def __init__(self, props):
             m.Texture.__init__(self, props)
-            if "filename" not in props:
-                raise TableError(f"{PLUGIN_NAME}: the texture needs a 'filename' (a wavelength table)")
-            self.filename = str(_resolve(str(props["filename"])))
             self.defensive = float(props["defensive"]) if "defensive" in props else 0.0
-            self.sampler = TableSampler(read_table(self.filename), m, self.defensive)
+            if ("filename" in props) == ("table" in props):
+                raise TableError(f"{PLUGIN_NAME}: the texture needs a 'filename' (a wavelength "
+                                 "table) or a 'table' (from emission_srf), one of the two")
+            if "table" in props:
+                from wavelength_pdf.mitsuba.emission import registered_table
+
+                self.filename = f"<{props['table']}>"
+                table = registered_table(str(props["table"]))
+            else:
+                self.filename = str(_resolve(str(props["filename"])))
+                table = read_table(self.filename)
+            self.sampler = TableSampler(table, m, self.defensive)
 
         def sample_spectrum(self, si, sample, active=True):
             u = m.Float64(sample[0])  # lane 0 of math::sample_shifted(u) is u itself

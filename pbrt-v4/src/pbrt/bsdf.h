@@ -1,6 +1,7 @@
 // BSDFs: the scattering functions materials produce at a hit. BxDFs work in the local
 // shading frame (z = shading normal); BSDF wraps one with the frame. Variants, not virtual
-// calls (bxdf.h: DiffuseBxDF; bxdfs.h: conductor, dielectric, coated diffuse).
+// calls (bxdf.h: DiffuseBxDF; bxdfs.h: diffuse transmission, conductor, dielectric, coated
+// diffuse).
 #pragma once
 
 #include <pbrt/bxdf.h>
@@ -15,7 +16,8 @@
 
 namespace pbrt {
 
-using BxDF = std::variant<DiffuseBxDF, ConductorBxDF, DielectricBxDF, CoatedDiffuseBxDF>;
+using BxDF = std::variant<DiffuseBxDF, ConductorBxDF, DielectricBxDF, CoatedDiffuseBxDF,
+                          DiffuseTransmissionBxDF>;
 
 class BSDF {
   public:

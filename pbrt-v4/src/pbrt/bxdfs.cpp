@@ -46,6 +46,43 @@ constexpr uint64_t kTagF = 0x66, kTagSample = 0x73, kTagPDF = 0x70;
 }  // namespace
 
 // =======================================================================================
+// DiffuseTransmissionBxDF
+
+SampledSpectrum DiffuseTransmissionBxDF::f(const Vector3f &wo, const Vector3f &wi, TransportMode) const {
+    return (SameHemisphere(wo, wi) ? R : T) * InvPi;
+}
+
+bool DiffuseTransmissionBxDF::LobeProbabilities(BxDFReflTransFlags flags, Float *pr, Float *pt) const {
+    Float r = Allows(flags, BxDFReflTransFlags::Reflection) ? R.MaxComponentValue() : 0;
+    Float t = Allows(flags, BxDFReflTransFlags::Transmission) ? T.MaxComponentValue() : 0;
+    if (!(r + t > 0)) return false;
+    *pr = r / (r + t);
+    *pt = t / (r + t);
+    return true;
+}
+
+std::optional<BSDFSample> DiffuseTransmissionBxDF::Sample_f(const Vector3f &wo, Float uc, Point2f u,
+                                                            TransportMode, BxDFReflTransFlags flags) const {
+    Float pr, pt;
+    if (!LobeProbabilities(flags, &pr, &pt)) return std::nullopt;
+    // A cosine-distributed direction above the surface, then flipped to wo's side
+    // (reflection) or to the other side (transmission).
+    bool transmit = !(uc < pr);
+    Vector3f wi = SampleCosineHemisphere(u);
+    if ((wo.z < 0) != transmit) wi.z = -wi.z;
+    Float pdf = CosineHemispherePDF(AbsCosTheta(wi)) * (transmit ? pt : pr);
+    if (pdf == 0) return std::nullopt;
+    return MakeSample((transmit ? T : R) * InvPi, wi, pdf, false, transmit);
+}
+
+Float DiffuseTransmissionBxDF::PDF(const Vector3f &wo, const Vector3f &wi, TransportMode,
+                                   BxDFReflTransFlags flags) const {
+    Float pr, pt;
+    if (!LobeProbabilities(flags, &pr, &pt)) return 0;
+    return CosineHemispherePDF(AbsCosTheta(wi)) * (SameHemisphere(wo, wi) ? pr : pt);
+}
+
+// =======================================================================================
 // ConductorBxDF
 
 SampledSpectrum ConductorBxDF::f(const Vector3f &wo, const Vector3f &wi, TransportMode) const {

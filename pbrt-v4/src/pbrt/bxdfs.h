@@ -1,5 +1,8 @@
-// The BxDFs of the "conductor", "dielectric" and "coateddiffuse" materials, in the local
-// shading frame (z = shading normal), following the models of the pbrt book, 4th ed.:
+// The BxDFs of the "diffusetransmission", "conductor", "dielectric" and "coateddiffuse"
+// materials, in the local shading frame (z = shading normal), following the models of the
+// pbrt book, 4th ed.:
+//   DiffuseTransmissionBxDF  Lambertian reflection R / pi on the side of wo and Lambertian
+//                      transmission T / pi to the other side (a thin translucent sheet).
 //   ConductorBxDF      section 9.6: specular (smooth) or Trowbridge-Reitz microfacet
 //                      reflection with the conductor Fresnel term (complex IOR eta + i k).
 //   DielectricBxDF     sections 9.5 and 9.7: specular or microfacet reflection and
@@ -40,6 +43,35 @@ enum class BxDFReflTransFlags { Reflection = 1, Transmission = 2, All = 3 };
 inline bool Allows(BxDFReflTransFlags flags, BxDFReflTransFlags kind) {
     return (int(flags) & int(kind)) != 0;
 }
+
+// ---------------------------------------------------------------------------------------
+// f(wo, wi) = R / pi when wi is on wo's side of the surface, T / pi on the other side; no
+// refraction (eta 1), so f is symmetric in wo and wi in both transport modes. Sample_f picks
+// reflection or transmission with probabilities proportional to the largest value of R and
+// of T over the path's wavelengths (restricted by flags), then a cosine-distributed
+// direction in that hemisphere; PDF is that mixture's density.
+class DiffuseTransmissionBxDF {
+  public:
+    DiffuseTransmissionBxDF(const SampledSpectrum &R, const SampledSpectrum &T) : R(R), T(T) {}
+
+    bool IsBlack() const { return !R.IsNonZero() && !T.IsNonZero(); }
+    bool IsSpecular() const { return false; }
+
+    SampledSpectrum f(const Vector3f &wo, const Vector3f &wi,
+                      TransportMode mode = TransportMode::Radiance) const;
+    std::optional<BSDFSample> Sample_f(const Vector3f &wo, Float uc, Point2f u,
+                                       TransportMode mode = TransportMode::Radiance,
+                                       BxDFReflTransFlags flags = BxDFReflTransFlags::All) const;
+    Float PDF(const Vector3f &wo, const Vector3f &wi, TransportMode mode = TransportMode::Radiance,
+              BxDFReflTransFlags flags = BxDFReflTransFlags::All) const;
+
+  private:
+    // The probabilities of choosing reflection and transmission (summing to 1), or false
+    // when flags leave nothing to choose.
+    bool LobeProbabilities(BxDFReflTransFlags flags, Float *pr, Float *pt) const;
+
+    SampledSpectrum R, T;
+};
 
 // ---------------------------------------------------------------------------------------
 class ConductorBxDF {

@@ -1,5 +1,5 @@
 // Tests of the Fresnel terms, the Trowbridge-Reitz distribution, the Henyey-Greenstein phase
-// function and the conductor, dielectric and coated-diffuse BxDFs:
+// function and the diffuse-transmission, conductor, dielectric and coated-diffuse BxDFs:
 //   energy       white-furnace albedo E[f |cos| / pdf] <= 1, and = 1 where lossless;
 //   reciprocity  f(wo, wi) = f(wi, wo) for reflection, the eta^2 rule for transmission;
 //   sampling     chi-square of sampled directions against the integrated PDF (non-delta
@@ -19,6 +19,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <optional>
@@ -970,6 +972,189 @@ TEST(CoatedDiffuseBxDF, Reciprocity) {
                 << " +- " << e.stdErr << " (f ~ " << mean << ")";
             EXPECT_GT(mean, 0) << Describe(cfg, co);
         }
+}
+
+// =======================================================================================
+// DiffuseTransmissionBxDF
+
+// Reflectance and transmittance pairs: pbrt-v4's default (0.25, 0.25), a lossless sheet, a
+// spectrally selective filter (different at each of the four wavelengths), reflection only,
+// transmission only.
+struct DiffTransConfig {
+    const char *name;
+    std::array<Float, 4> R, T;
+};
+const DiffTransConfig kDiffTrans[] = {
+    {"default", {0.25f, 0.25f, 0.25f, 0.25f}, {0.25f, 0.25f, 0.25f, 0.25f}},
+    {"lossless", {0.3f, 0.3f, 0.3f, 0.3f}, {0.7f, 0.7f, 0.7f, 0.7f}},
+    {"green filter", {0.08f, 0.1f, 0.06f, 0.05f}, {0.02f, 0.75f, 0.3f, 0.01f}},
+    {"reflection only", {0.6f, 0.5f, 0.4f, 0.3f}, {0, 0, 0, 0}},
+    {"transmission only", {0, 0, 0, 0}, {0.9f, 0.2f, 0.5f, 0.1f}},
+};
+DiffuseTransmissionBxDF MakeDiffTrans(const DiffTransConfig &c) {
+    return DiffuseTransmissionBxDF(SampledSpectrum(c.R), SampledSpectrum(c.T));
+}
+std::string Describe(const DiffTransConfig &c, Float cosTheta) {
+    std::ostringstream os;
+    os << "diffusetransmission[" << c.name << "] cos(theta_o) = " << cosTheta;
+    return os.str();
+}
+
+TEST(DiffuseTransmissionBxDF, IsLambertianOnEachSide) {
+    for (const DiffTransConfig &cfg : kDiffTrans) {
+        DiffuseTransmissionBxDF b = MakeDiffTrans(cfg);
+        EXPECT_FALSE(b.IsSpecular());
+        EXPECT_FALSE(b.IsBlack()) << cfg.name;
+        for (Float c : kSignedCos) {
+            Vector3f wo = Dir(c, 0.7f);
+            for (Float ci : {0.01f, 0.4f, 1.0f})
+                for (Float phi : {0.0f, 2.0f, 4.5f}) {
+                    Vector3f same = Dir(std::copysign(ci, c), phi), other = Dir(-std::copysign(ci, c), phi);
+                    SampledSpectrum fr = b.f(wo, same), ft = b.f(wo, other);
+                    for (int i = 0; i < 4; ++i) {
+                        EXPECT_FLOAT_EQ(fr[i], cfg.R[i] / Float(kPi)) << Describe(cfg, c);
+                        EXPECT_FLOAT_EQ(ft[i], cfg.T[i] / Float(kPi)) << Describe(cfg, c);
+                    }
+                }
+        }
+    }
+    DiffuseTransmissionBxDF black(SampledSpectrum(0), SampledSpectrum(0));
+    EXPECT_TRUE(black.IsBlack());
+    EXPECT_FALSE(black.Sample_f(Dir(0.5f, 0), 0.3f, {0.2f, 0.6f}));
+    EXPECT_EQ(black.PDF(Dir(0.5f, 0), Dir(-0.5f, 1)), 0);
+}
+
+// Energy: each sample's weight f |cos| / pdf is R / P_r or T / P_t, so the white-furnace
+// albedo is exactly R + T at every wavelength; f() integrated over the sphere agrees, and
+// PDF() integrates to 1 (to 0 when both lobes are black).
+TEST(DiffuseTransmissionBxDF, EnergyIsReflectancePlusTransmittance) {
+    for (const DiffTransConfig &cfg : kDiffTrans)
+        for (Float c : kSignedCos) {
+            DiffuseTransmissionBxDF b = MakeDiffTrans(cfg);
+            Vector3f wo = Dir(c, 0.3f);
+            RNG rng(71);
+            const int n = 20000;
+            std::vector<double> w[4];
+            for (int i = 0; i < n; ++i) {
+                Float uc = rng.UniformFloat();
+                Point2f u(rng.UniformFloat(), rng.UniformFloat());
+                std::optional<BSDFSample> s = b.Sample_f(wo, uc, u);
+                for (int k = 0; k < 4; ++k)
+                    w[k].push_back(s ? double(s->f[k]) * AbsCosTheta(s->wi) / s->pdf : 0.0);
+            }
+            for (int k = 0; k < 4; ++k) {
+                Estimate e = MeanOf(w[k]);
+                double want = cfg.R[k] + cfg.T[k];
+                EXPECT_NEAR(e.mean, want, 4 * e.stdErr + 1e-6) << Describe(cfg, c) << " channel " << k;
+            }
+            auto upper = [&](const std::function<double(const Vector3f &)> &g) {
+                // Both hemispheres: the integral over the upper one of g(w) + g(-w).
+                return IntegrateHemisphere([&](const Vector3f &v) { return g(v) + g(-v); }, 100, 50);
+            };
+            double pdfIntegral = upper([&](const Vector3f &wi) { return double(b.PDF(wo, wi)); });
+            EXPECT_NEAR(pdfIntegral, 1, 2e-3) << Describe(cfg, c);
+            for (int k = 0; k < 4; ++k) {
+                double albedo = upper([&](const Vector3f &wi) { return b.f(wo, wi)[k] * AbsCosTheta(wi); });
+                EXPECT_NEAR(albedo, cfg.R[k] + cfg.T[k], 2e-3) << Describe(cfg, c) << " channel " << k;
+            }
+        }
+}
+
+// Reciprocity: no refraction, so f(wo, wi) = f(wi, wo) for reflection and transmission
+// alike, and importance transport sees the same f.
+TEST(DiffuseTransmissionBxDF, Reciprocity) {
+    RNG rng(73);
+    for (const DiffTransConfig &cfg : kDiffTrans) {
+        DiffuseTransmissionBxDF b = MakeDiffTrans(cfg);
+        for (int i = 0; i < 400; ++i) {
+            Vector3f wo = SampleUniformSphere({rng.UniformFloat(), rng.UniformFloat()});
+            Vector3f wi = SampleUniformSphere({rng.UniformFloat(), rng.UniformFloat()});
+            SampledSpectrum a = b.f(wo, wi), r = b.f(wi, wo), imp = b.f(wi, wo, TransportMode::Importance);
+            for (int k = 0; k < 4; ++k) {
+                ASSERT_EQ(a[k], r[k]) << cfg.name << " wo " << ToString(wo) << " wi " << ToString(wi);
+                ASSERT_EQ(a[k], imp[k]) << cfg.name << " (importance)";
+            }
+        }
+    }
+}
+
+// Sampling: Sample_f's f and pdf are f() and PDF() at every wavelength; reflected samples
+// stay on wo's side and transmitted ones cross (flagged, with eta 1); the directions follow
+// PDF() (chi-square over the whole sphere), also with the lobes restricted by flags.
+TEST(DiffuseTransmissionBxDF, SamplingMatchesEvaluationAndPDF) {
+    for (const DiffTransConfig &cfg : kDiffTrans)
+        for (Float c : kSignedCosChi2) {
+            DiffuseTransmissionBxDF b = MakeDiffTrans(cfg);
+            Vector3f wo = Dir(c, 0.8f);
+            std::string what = Describe(cfg, c);
+            RNG rng(79);
+            int reflected = 0;
+            const int n = 4000;
+            for (int i = 0; i < n; ++i) {
+                Float uc = rng.UniformFloat();
+                Point2f u(rng.UniformFloat(), rng.UniformFloat());
+                std::optional<BSDFSample> s = b.Sample_f(wo, uc, u);
+                ASSERT_TRUE(s) << what;
+                EXPECT_FALSE(s->specular);
+                EXPECT_EQ(s->eta, 1);
+                EXPECT_EQ(s->transmission, !SameHemisphere(wo, s->wi)) << what;
+                reflected += !s->transmission;
+                ASSERT_NEAR(s->pdf, b.PDF(wo, s->wi), 1e-6f * s->pdf) << what;
+                SampledSpectrum f = b.f(wo, s->wi);
+                for (int k = 0; k < 4; ++k) ASSERT_EQ(s->f[k], f[k]) << what << " channel " << k;
+            }
+            // Reflection is chosen with probability max R / (max R + max T).
+            Float maxR = *std::max_element(cfg.R.begin(), cfg.R.end());
+            Float maxT = *std::max_element(cfg.T.begin(), cfg.T.end());
+            double pr = maxR / (maxR + maxT);
+            EXPECT_NEAR(double(reflected) / n, pr, 4 * std::sqrt(pr * (1 - pr) / n) + 1e-9) << what;
+
+            for (BxDFReflTransFlags flags : {BxDFReflTransFlags::All, BxDFReflTransFlags::Reflection,
+                                             BxDFReflTransFlags::Transmission}) {
+                bool possible = (Allows(flags, BxDFReflTransFlags::Reflection) && maxR > 0) ||
+                                (Allows(flags, BxDFReflTransFlags::Transmission) && maxT > 0);
+                if (!possible) {
+                    EXPECT_FALSE(b.Sample_f(wo, 0.5f, {0.5f, 0.5f}, TransportMode::Radiance, flags)) << what;
+                    EXPECT_EQ(b.PDF(wo, Dir(0.5f, 0), TransportMode::Radiance, flags), 0) << what;
+                    EXPECT_EQ(b.PDF(wo, Dir(-0.5f, 0), TransportMode::Radiance, flags), 0) << what;
+                    continue;
+                }
+                std::string report;
+                double p = ChiSquareTest(
+                    [&](Float uc, Point2f u) -> std::optional<Vector3f> {
+                        auto s = b.Sample_f(wo, uc, u, TransportMode::Radiance, flags);
+                        if (!s) return std::nullopt;
+                        return s->wi;
+                    },
+                    [&](const Vector3f &wi) { return double(b.PDF(wo, wi, TransportMode::Radiance, flags)); },
+                    kChi2Samples, 83, &report);
+                EXPECT_GT(p, kChi2Alpha) << what << " flags " << int(flags) << ": " << report;
+            }
+        }
+}
+
+// Through the BSDF wrapper (world space, an arbitrary shading frame): the same values, and
+// a transmitted sample leaves through the other side of the surface.
+TEST(DiffuseTransmissionBxDF, InABSDF) {
+    Normal3f n(Normalize(Vector3f(0.3f, -0.5f, 0.8f)));
+    BSDF bsdf(n, Vector3f(1, 0, 0), DiffuseTransmissionBxDF(SampledSpectrum(0.2f), SampledSpectrum(0.6f)));
+    EXPECT_TRUE(bsdf.IsNonSpecular());
+    EXPECT_FALSE(bsdf.HasCostlyF());
+    Vector3f wo = Normalize(Vector3f(0.1f, -0.2f, 1));
+    RNG rng(89);
+    int transmitted = 0;
+    for (int i = 0; i < 1000; ++i) {
+        Float uc = rng.UniformFloat();
+        Point2f u(rng.UniformFloat(), rng.UniformFloat());
+        std::optional<BSDFSample> s = bsdf.Sample_f(wo, uc, u);
+        ASSERT_TRUE(s);
+        bool crosses = Dot(s->wi, Vector3f(n)) * Dot(wo, Vector3f(n)) < 0;
+        EXPECT_EQ(crosses, s->transmission);
+        transmitted += s->transmission;
+        EXPECT_FLOAT_EQ(bsdf.f(wo, s->wi)[0], (s->transmission ? 0.6f : 0.2f) / Float(kPi));
+        EXPECT_NEAR(bsdf.PDF(wo, s->wi), s->pdf, 1e-5f * s->pdf);
+    }
+    EXPECT_NEAR(transmitted / 1000.0, 0.75, 0.06);  // P_t = 0.6 / (0.2 + 0.6)
 }
 
 }  // namespace

@@ -6,10 +6,19 @@
 #include <pbrt/util/output_path.h>
 #include <pbrt/util/spectrum.h>
 
+#include <pbrt/util/cie_data.h>
+
+#include <wavelength_table.h>
+
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <map>
 
 namespace pbrt {
 
@@ -28,10 +37,36 @@ EmissionSpectrum SceneEmissionSpectrum(const Scene &scene) {
     if (scene.lights.empty())
         throw PbrtError("the scene has no emitters (no LightSource and no shape with an "
                         "AreaLightSource), so it emits no spectral power");
+    // Lights that share a spectrum (the triangles of an area light; equal tables, which
+    // Light::ShareEqualSpectra merges) are summed first: each distinct spectrum is then
+    // evaluated once, however many triangles emit it.
+    struct Group {
+        const Spectrum *spectrum;
+        double k = 0;          // sum of PowerFactor() * Scale() over its lights
+        const Light *largest;  // the light with the largest share (named in errors)
+        double largestK = 0;
+    };
+    std::vector<Group> groups;
+    std::map<const Spectrum *, size_t> index;
+    for (const Light &l : scene.lights) {
+        const double k = l.PowerFactor() * double(l.Scale());
+        if (!std::isfinite(k))
+            throw PbrtError(l.Loc(), "this light's emitted power is not finite (its \"scale\" or "
+                                     "\"power\", its area or the scene's extent overflows)");
+        if (k == 0) continue;
+        auto [it, added] = index.emplace(l.EmissionSpectrum().get(), groups.size());
+        if (added) groups.push_back(Group{l.EmissionSpectrum().get(), 0, &l, 0});
+        Group &g = groups[it->second];
+        g.k += k;
+        if (k > g.largestK) {
+            g.largest = &l;
+            g.largestK = k;
+        }
+    }
     std::vector<double> grid{double(Lambda_min), double(Lambda_max)};
     bool smooth = false;
-    for (const Light &l : scene.lights) {
-        if (const std::vector<Float> *nodes = Nodes(*l.EmissionSpectrum())) {
+    for (const Group &g : groups) {
+        if (const std::vector<Float> *nodes = Nodes(*g.spectrum)) {
             for (Float x : *nodes)
                 if (x >= Lambda_min && x <= Lambda_max) grid.push_back(double(x));
         } else {
@@ -46,23 +81,71 @@ EmissionSpectrum SceneEmissionSpectrum(const Scene &scene) {
     EmissionSpectrum out;
     out.lambdas = grid;
     out.values.assign(grid.size(), 0.0);
-    for (const Light &l : scene.lights) {
-        double k = l.PowerFactor() * double(l.Scale());
-        if (k == 0) continue;
-        const Spectrum &s = *l.EmissionSpectrum();
-        for (size_t i = 0; i < grid.size(); ++i) out.values[i] += k * double(s(Float(grid[i])));
+    const Group *largest = nullptr;
+    for (const Group &g : groups) {
+        if (!largest || g.k > largest->k) largest = &g;
+        for (size_t i = 0; i < grid.size(); ++i) {
+            const double v = g.k * double((*g.spectrum)(Float(grid[i])));
+            if (!std::isfinite(v))
+                throw PbrtError(g.largest->Loc(),
+                                "this light's emitted power is not finite at " +
+                                    std::to_string(int(grid[i])) + " nm (its \"scale\" or "
+                                    "\"power\", its area or the scene's extent overflows)");
+            out.values[i] += v;
+        }
     }
     bool positive = false;
     for (double v : out.values) {
         if (!std::isfinite(v))
-            throw PbrtError("the scene's total emitted power is not finite (a light's scale, "
-                            "power or the scene's extent overflows)");
+            throw PbrtError(largest->largest->Loc(),
+                            "the scene's total emitted power is not finite: this light and the "
+                            "others together overflow (a \"scale\" or \"power\" too large)");
         positive = positive || v > 0;
     }
     if (!positive)
-        throw PbrtError("the scene's lights emit no power between " + std::to_string(int(Lambda_min)) +
-                        " and " + std::to_string(int(Lambda_max)) + " nm (every \"scale\" is 0?)");
+        throw PbrtError(scene.lights.front().Loc(),
+                        "no light of the scene emits between " + std::to_string(int(Lambda_min)) +
+                            " and " + std::to_string(int(Lambda_max)) +
+                            " nm: this light and every other has zero power (\"scale\" 0?)");
     return out;
+}
+
+// ---- Emission sampling ------------------------------------------------------------------
+
+const std::vector<std::string> &EmissionWeights() {
+    static const std::vector<std::string> w{"spd", "luminance", "xyz"};
+    return w;
+}
+
+EmissionTable SceneEmissionTable(const Scene &scene, const std::string &weight) {
+    const std::vector<std::string> &known = EmissionWeights();
+    if (std::find(known.begin(), known.end(), weight) == known.end())
+        throw PbrtError("unknown emission weight \"" + weight + "\" (expected spd, luminance or xyz)");
+    const auto start = std::chrono::steady_clock::now();
+    EmissionSpectrum e = SceneEmissionSpectrum(scene);
+    // The weight at the CMFs' 1 nm nodes (none for "spd": the spectrum alone).
+    std::vector<double> wx, wv;
+    if (weight != "spd") {
+        for (int i = 0; i < cie::kNumSamples; ++i) {
+            wx.push_back(double(cie::kLambdaMin + i));
+            wv.push_back(weight == "luminance" ? cie::CIE_Y[i]
+                                               : (cie::CIE_X[i] + cie::CIE_Y[i]) + cie::CIE_Z[i]);
+        }
+    }
+    EmissionTable t;
+    t.weight = weight;
+    t.emissionNodes = e.lambdas.size();
+    try {
+        t.table = std::make_shared<const wavelength_table::Table>(wavelength_table::StratifiedTable(
+            e.lambdas, e.values, wx, wv, double(Lambda_min), double(Lambda_max),
+            "the scene's emission times the \"" + weight + "\" weight"));
+    } catch (const wavelength_table::TableError &err) {
+        // Only a weight without mass gets here (Phi is positive somewhere and every weight
+        // is positive on 360..830 nm), which the checks above make unreachable in practice.
+        throw PbrtError(scene.lights.front().Loc(), std::string("emission sampling: ") + err.what());
+    }
+    t.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return t;
 }
 
 // Writes `path` through `body` (which returns false when a write failed) under a temporary
@@ -84,6 +167,28 @@ void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {
                                "lambda (nm), power per nm\n") > 0;
         for (size_t i = 0; i < s.lambdas.size() && ok; ++i)
             ok = std::fprintf(f, "%.17g %.17g\n", s.lambdas[i], s.values[i]) > 0;
+        return ok;
+    });
+}
+
+void WriteEmissionTable(const std::string &path, const EmissionTable &t, const std::string &source) {
+    const wavelength_table::Table &table = *t.table;
+    WriteAtomically(path, [&](FILE *f) {
+        bool ok = std::fprintf(f,
+                               "# method: %s\n"
+                               "# source: %s (the scene's total emitted spectral power, design "
+                               "section 5.6)\n"
+                               "# stratified sampling of the scene's emission%s: four equal-mass "
+                               "bands (design section 1.7), as pbrt --wavelength-sampling emission "
+                               "samples it\n"
+                               "lambda_nm,pdf0,pdf1,pdf2,pdf3\n",
+                               t.weight.c_str(), source.c_str(),
+                               t.weight == "spd" ? ""
+                               : t.weight == "luminance" ? " times ybar"
+                                                         : " times xbar + ybar + zbar") > 0;
+        for (size_t i = 0; i < table.grid.size() && ok; ++i)
+            ok = std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g\n", table.grid[i], table.pdf[0][i],
+                              table.pdf[1][i], table.pdf[2][i], table.pdf[3][i]) > 0;
         return ok;
     });
 }

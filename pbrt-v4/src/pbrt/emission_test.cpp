@@ -8,6 +8,8 @@
 #include <pbrt/util/color.h>
 #include <pbrt/util/spectrum.h>
 
+#include <wavelength_table.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -87,7 +89,7 @@ TEST(Emission, SpotAndPowerParameters) {
     // (per unit luminance) times its "scale", as in pbrt-v4.
     Lin s{{360, 830}, {1, 3}};
     std::string world = R"(
-LightSource "spot" "spectrum I" [360 1 830 3] "float scale" [2] "float coneangle" [40] "float conedelta" [10]
+LightSource "spot" "spectrum I" [360 1 830 3] "float scale" [2] "float coneangle" [40] "float conedeltaangle" [10]
 AttributeBegin
   AreaLightSource "diffuse" "spectrum L" [360 1 830 3] "float power" [7] "float scale" [100]
   Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 2]
@@ -189,4 +191,64 @@ Shape "sphere"
     MaterialReflectances m = SceneMaterialReflectances(*Load(world));
     ASSERT_EQ(m.labels.size(), size_t(2));
     EXPECT_NE(m.values[0], m.values[1]);
+}
+
+// ---- Emission sampling (design §1.7): the table built from the scene's emitted power -------
+
+TEST(EmissionTable, ItsMixtureIsTheEmittedPowerTimesTheWeight) {
+    std::string world = R"(
+AttributeBegin
+  AreaLightSource "diffuse" "spectrum L" [360 0  436 9  437 0  500 1  611 5  620 1  830 0] "float scale" [2]
+  Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  1 1 0] "integer indices" [0 1 2]
+AttributeEnd
+LightSource "point" "blackbody I" [2700] "float scale" [0.5]
+)";
+    auto scene = Load(world);
+    EmissionSpectrum e = SceneEmissionSpectrum(*scene);
+    for (const std::string &w : EmissionWeights()) {
+        EmissionTable t = SceneEmissionTable(*scene, w);
+        ASSERT_TRUE(t.table);
+        EXPECT_EQ(t.weight, w);
+        EXPECT_GE(t.seconds, 0.0);
+        EXPECT_EQ(t.table->grid.front(), 360.0);
+        EXPECT_EQ(t.table->grid.back(), 830.0);
+        // (1/4) sum_k p_k = q / M with q = Phi * w, linear between Phi's and the CMFs' nodes.
+        auto weight = [&](double l) {
+            if (w == "spd") return 1.0;
+            const int i = int(l) - cie::kLambdaMin;
+            return w == "luminance" ? cie::CIE_Y[i] : cie::CIE_X[i] + cie::CIE_Y[i] + cie::CIE_Z[i];
+        };
+        double mass = 0;
+        for (size_t i = 0; i + 1 < e.lambdas.size(); ++i)  // Phi's nodes include the 1 nm grid here
+            mass += 0.5 * (e.values[i] * weight(e.lambdas[i]) + e.values[i + 1] * weight(e.lambdas[i + 1])) *
+                    (e.lambdas[i + 1] - e.lambdas[i]);
+        for (size_t i = 0; i < e.lambdas.size(); ++i) {
+            const double want = e.values[i] * weight(e.lambdas[i]) / mass;
+            EXPECT_NEAR(wavelength_table::MixturePdf(*t.table, e.lambdas[i]), want, 1e-9 * want + 1e-15)
+                << w << " at " << e.lambdas[i] << " nm";
+        }
+    }
+    EXPECT_THROW(SceneEmissionTable(*scene, "ybar"), PbrtError);
+}
+
+TEST(EmissionTable, BadLightsAreNamed) {
+    // Every light emits nothing: the first light's directive is named.
+    try {
+        SceneEmissionTable(*Load("\nLightSource \"point\" \"float scale\" [0]\n"), "spd");
+        FAIL() << "expected an error";
+    } catch (const PbrtError &err) {
+        EXPECT_EQ(std::string(err.what()).rfind("<string>:7:1: no light of the scene emits", 0), 0u)
+            << err.what();
+    }
+    // A light whose power overflows (a tiny luminance normalized to 1 nit, a huge scale).
+    try {
+        SceneEmissionTable(*Load(R"(
+LightSource "point" "float scale" [1]
+LightSource "point" "spectrum I" [400 1e-30 700 1e-30] "float scale" [3e38]
+)"), "spd");
+        FAIL() << "expected an error";
+    } catch (const PbrtError &err) {
+        EXPECT_EQ(std::string(err.what()).rfind("<string>:8:1: this light's emitted power is not finite", 0), 0u)
+            << err.what();
+    }
 }

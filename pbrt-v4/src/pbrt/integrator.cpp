@@ -64,7 +64,7 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
 }  // namespace
 
 SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
-                       Sampler &sampler, int maxDepth) {
+                       Sampler &sampler, int maxDepth, int *depthOut) {
     SampledSpectrum L(0), beta(1);
     int depth = 0, skips = 0;
     Float p_b = 1, etaScale = 1;
@@ -171,6 +171,7 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
             beta /= 1 - q;
         }
     }
+    if (depthOut) *depthOut = depth;
     return L;
 }
 

@@ -28,8 +28,10 @@ struct IntegratorSettings {
 
 // Radiance arriving along `ray` at the camera, at the wavelengths lambda. A dispersive
 // material on the path terminates lambda's secondary wavelengths (design §1), so the caller
-// must weight the result with lambda as it is after the call.
+// must weight the result with lambda as it is after the call. `depth`, when given, receives
+// the number of surfaces with a material the path reached (the last one, where maxdepth or
+// Russian roulette ended it, included).
 SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
-                       Sampler &sampler, int maxDepth);
+                       Sampler &sampler, int maxDepth, int *depth = nullptr);
 
 }  // namespace pbrt

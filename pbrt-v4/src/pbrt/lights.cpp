@@ -283,7 +283,7 @@ Light Light::Create(const std::string &name, const ParameterDictionary &params,
             Point3f to = point3("to", {0, 0, 1});
             if (to == from) throw PbrtError(loc, "spot light: \"from\" and \"to\" coincide");
             t = t * FromLocalFrame(Normalize(to - from));
-            Float cone = params.GetOneFloat("coneangle", 30), delta = params.GetOneFloat("conedelta", 5);
+            Float cone = params.GetOneFloat("coneangle", 30), delta = params.GetOneFloat("conedeltaangle", 5);
             l.cosFalloffEnd = std::cos(Radians(cone));
             l.cosFalloffStart = std::cos(Radians(cone - delta));
             k_e = 2 * Pi * ((1 - l.cosFalloffStart) + (l.cosFalloffStart - l.cosFalloffEnd) / 2);

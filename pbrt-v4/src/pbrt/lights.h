@@ -1,6 +1,6 @@
 // Lights, following pbrt-v4's definitions and conventions:
 //   "point"     I, scale, power, from
-//   "spot"      I, scale, power, from, to, coneangle (30), conedelta (5)
+//   "spot"      I, scale, power, from, to, coneangle (30), conedeltaangle (5)
 //   "distant"   L, scale, illuminance, from (0 0 0), to (0 0 1)
 //   "infinite"  L, scale, illuminance (constant radiance from every direction)
 //   area "diffuse"  L, scale, power, twosided: emits on the side of the surface normal

@@ -61,13 +61,22 @@ TEST(Lights, SpotLight) {
                     kAlbedo / Pi * 3, "spot light on axis");
     Stat off = FloorLuminance(R"(LightSource "spot" "point3 from" [0 0 1] "point3 to" [1 0 1] "float coneangle" [30])", 16);
     EXPECT_EQ(off.mean, 0) << "a point 90 degrees off the spot's axis is dark";
-    // In the falloff zone: smoothstep of cos(theta) between the cone and cone - delta.
-    double theta = Radians(27), ct = std::cos(theta);
-    double c0 = std::cos(Radians(30)), c1 = std::cos(Radians(25));
+    // In the falloff zone: smoothstep of cos(theta) between the cone and cone - delta
+    // (pbrt-v4's parameter "conedeltaangle"; 10 here, not its default 5).
+    double theta = Radians(24), ct = std::cos(theta);
+    double c0 = std::cos(Radians(30)), c1 = std::cos(Radians(20));
     double t = (ct - c0) / (c1 - c0), falloff = t * t * (3 - 2 * t);
     ExpectLuminance(R"(LightSource "spot" "point3 from" [0 0 1] "point3 to" [)" + std::to_string(std::tan(theta)) +
-                        R"( 0 0] "float coneangle" [30] "float conedelta" [5])",
+                        R"( 0 0] "float coneangle" [30] "float conedeltaangle" [10])",
                     kAlbedo / Pi * falloff, "spot light falloff");
+    // "conedelta" is not a pbrt-v4 parameter: an error, as in pbrt-v4.
+    try {
+        LoadSceneFromString("WorldBegin\nLightSource \"spot\" \"float conedelta\" [10]\n", RenderOptions{}, "spot.pbrt");
+        ADD_FAILURE() << "\"conedelta\" was accepted";
+    } catch (const PbrtError &e) {
+        EXPECT_NE(std::string(e.what()).find("spot.pbrt:2:"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("conedelta"), std::string::npos) << e.what();
+    }
 }
 
 TEST(Lights, DistantLight) {

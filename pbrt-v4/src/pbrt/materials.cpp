@@ -3,6 +3,9 @@
 #include <pbrt/bumpmap.h>
 #include <pbrt/util/paramdict.h>
 
+#include <cmath>
+#include <cstdio>
+
 namespace pbrt {
 
 TrowbridgeReitzDistribution MaterialRoughness::Distribution(const TextureEvalContext &ctx) const {
@@ -71,6 +74,11 @@ struct MakeBxDF {
         return CoatedDiffuseBxDF(DielectricBxDF(eta, distrib), DiffuseBxDF(r), thickness, albedo, g,
                                  m.maxDepth, m.nSamples, m.seed);
     }
+    BxDF operator()(const DiffuseTransmissionMaterial &m) const {
+        SampledSpectrum r = Clamp(m.scale * m.reflectance->Evaluate(ctx, lambda), Float(0), Float(1));
+        SampledSpectrum t = Clamp(m.scale * m.transmittance->Evaluate(ctx, lambda), Float(0), Float(1));
+        return DiffuseTransmissionBxDF(r, t);
+    }
     BxDF operator()(const InterfaceMaterial &) const { return DiffuseBxDF(SampledSpectrum(0)); }
 };
 
@@ -138,6 +146,40 @@ SpectrumTextureHandle NamedMetal(const char *name, const FileLoc &loc) {
     return MakeConstantSpectrumTexture(s);
 }
 
+// "diffusetransmission": reflectance and transmittance 0.25 and scale 1 by default (pbrt-v4's
+// defaults). scale must be finite and >= 0. Constant spectra whose scaled sum exceeds 1 at
+// some wavelength reflect and transmit more than they receive (pbrt-v4 renders them so):
+// a warning, not an error.
+DiffuseTransmissionMaterial CreateDiffuseTransmission(const ParameterDictionary &params,
+                                                      const TextureResolver &textures) {
+    DiffuseTransmissionMaterial m;
+    m.reflectance = textures.spectrum("reflectance", std::make_shared<ConstantSpectrum>(0.25f),
+                                      SpectrumType::Albedo);
+    m.transmittance = textures.spectrum("transmittance", std::make_shared<ConstantSpectrum>(0.25f),
+                                        SpectrumType::Albedo);
+    m.scale = params.GetOneFloat("scale", 1);
+    if (!std::isfinite(m.scale) || m.scale < 0)
+        throw PbrtError(params.Loc("scale"), "diffusetransmission: \"scale\" must be finite and >= 0");
+    m.displacement = textures.floats("displacement", std::nullopt);
+    SpectrumHandle r = m.reflectance->Constant(), t = m.transmittance->Constant();
+    if (r && t) {
+        for (int nm = int(Lambda_min); nm <= int(Lambda_max); ++nm) {
+            Float sum = std::min<Float>(1, m.scale * (*r)(Float(nm))) + std::min<Float>(1, m.scale * (*t)(Float(nm)));
+            if (sum > 1.001f) {
+                FileLoc where = params.Find("transmittance") ? params.Loc("transmittance")
+                              : params.Find("reflectance") ? params.Loc("reflectance") : params.Loc("scale");
+                char value[32];
+                std::snprintf(value, sizeof(value), "%.3g", double(sum));
+                Warning(where, std::string("diffusetransmission: scale * (reflectance + transmittance) is ") +
+                                   value + " at " + std::to_string(nm) +
+                                   " nm: the surface gives out more light than it receives");
+                break;
+            }
+        }
+    }
+    return m;
+}
+
 }  // namespace
 
 Material CreateMaterial(const std::string &type, const ParameterDictionary &params,
@@ -196,9 +238,10 @@ Material CreateMaterial(const std::string &type, const ParameterDictionary &para
         m.displacement = displacement;
         return m;
     }
+    if (type == "diffusetransmission") return CreateDiffuseTransmission(params, textures);
     throw PbrtError(loc, "material type \"" + type +
                              "\" is not supported (supported: diffuse, conductor, dielectric, "
-                             "coateddiffuse, interface)");
+                             "coateddiffuse, diffusetransmission, interface)");
 }
 
 }  // namespace pbrt

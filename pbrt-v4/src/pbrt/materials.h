@@ -6,6 +6,9 @@
 //   "dielectric"     eta (float or spectrum, default 1.5; 0 means 1), roughness as above
 //   "coateddiffuse"  reflectance 0.5, roughness 0, remaproughness, thickness 0.01, eta 1.5,
 //                    albedo 0, g 0, maxdepth 10, nsamples 1
+//   "diffusetransmission"  reflectance 0.25, transmittance 0.25 (spectrum textures), scale 1
+//                    (float >= 0): Lambertian reflection clamp(scale * reflectance, 0, 1) and
+//                    Lambertian transmission clamp(scale * transmittance, 0, 1)
 //   "interface"      no surface at all: rays pass through (marks medium boundaries)
 // Every material but "interface" takes a float texture "displacement" (bump mapping,
 // bumpmap.h). A spectrally varying eta (dielectric, coateddiffuse) disperses light: the
@@ -61,10 +64,15 @@ struct CoatedDiffuseMaterial {
     uint64_t seed = 0;
     FloatTextureHandle displacement;
 };
+struct DiffuseTransmissionMaterial {
+    SpectrumTextureHandle reflectance, transmittance;
+    Float scale = 1;
+    FloatTextureHandle displacement;
+};
 struct InterfaceMaterial {};
 
 using Material = std::variant<DiffuseMaterial, InterfaceMaterial, ConductorMaterial,
-                              DielectricMaterial, CoatedDiffuseMaterial>;
+                              DielectricMaterial, CoatedDiffuseMaterial, DiffuseTransmissionMaterial>;
 
 // The BSDF at a hit; nullopt for "interface". A material with a spectrally varying eta
 // terminates the secondary wavelengths of lambda (design §1), choosing the kept one with a

@@ -16,21 +16,30 @@ struct RenderOptions {
     int nThreads = 0;                     // --nthreads: 0 = all cores
     std::optional<uint64_t> seed;         // --seed: overrides the scene's seeds
     bool quiet = false;                   // --quiet: no progress bar or summary
-    // Wavelength sampling (design §5): "visible" (pbrt-v4's default) or "uniform" over
-    // [lambdaMin, lambdaMax] (stratified).
+    // Wavelength sampling (design §5): "visible" (pbrt-v4's default), "uniform" over
+    // [lambdaMin, lambdaMax] (stratified), or "emission" (a table built from the scene's
+    // emitted power times emissionWeight, design §1.7; emission.h).
     std::string wavelengthSampling = "visible";
+    std::string emissionWeight = "spd";   // --emission-weight: spd, luminance or xyz
     Float lambdaMin = 360, lambdaMax = 830;
     std::string wavelengthTable;          // --wavelength-pdf FILE: sample from a table (design §1, §2)
     Float defensiveShare = 0;             // --wavelength-pdf-defensive S: uniform share in [0, 1]
     Point2i resolution{0, 0};             // --resolution WxH (0: the film's)
     Float resolutionScale = 1;            // --resolution-scale S: multiplies the resolution
     std::optional<int> maxDepth;          // --maxdepth: overrides the integrator's
+    // --wavelength-repeats K: trace every camera sample K times with the same random numbers
+    // except the wavelength number, shifted by k/K, and average them (design §5.2): the
+    // benchmark's floor, an image whose wavelength noise is averaged away.
+    int wavelengthRepeats = 1;
     // --emission-spectrum FILE: write the scene's total emitted spectral power (design §5.6)
     // instead of rendering (the film's output path is then not checked).
     std::string emissionSpectrum;
     // --material-reflectances FILE: write the diffuse reflectances of the scene's materials
     // (design §5.6) instead of rendering.
     std::string materialReflectances;
+    // --emission-table FILE: write the table --wavelength-sampling emission would sample from
+    // (design §2 layout) instead of rendering.
+    std::string emissionTable;
 };
 
 }  // namespace pbrt

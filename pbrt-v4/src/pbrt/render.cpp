@@ -9,6 +9,7 @@
 
 #include <sys/resource.h>
 
+#include <atomic>
 #include <cmath>
 #include <memory>
 
@@ -24,13 +25,21 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     ImageMetadata m;
     m.ints["samplesPerPixel"] = scene.sampler.SamplesPerPixel();
     m.floats["renderTimeSeconds"] = float(stats.wallSeconds);
+    m.floats["renderCPUSeconds"] = float(stats.cpuSeconds);
+    m.floats["meanPathDepth"] = stats.paths ? float(double(stats.scatterings) / double(stats.paths)) : 0.f;
+    if (stats.wavelengthRepeats > 1) m.ints["wavelengthRepeats"] = stats.wavelengthRepeats;
     m.strings["seed"] = std::to_string(scene.sampler.Seed());
     m.strings["wavelengthSampler"] = scene.wavelengths.Name();
     m.float2s["wavelengthRange"] = {float(scene.wavelengths.MinLambda()), float(scene.wavelengths.MaxLambda())};
     if (const TableWavelengthSampler *t = scene.wavelengths.Table()) {
-        m.strings["wavelengthTable"] = t->file;
-        m.strings["wavelengthTableSHA256"] = t->sha256;
-        m.floats["wavelengthDefensiveShare"] = float(t->share);
+        if (!t->emissionWeight.empty()) {
+            // Emission sampling: a table built from the scene, not read from a file.
+            m.strings["wavelengthEmissionWeight"] = t->emissionWeight;
+        } else {
+            m.strings["wavelengthTable"] = t->file;
+            m.strings["wavelengthTableSHA256"] = t->sha256;
+            m.floats["wavelengthDefensiveShare"] = float(t->share);
+        }
     }
     return m;
 }
@@ -57,7 +66,7 @@ void WarnNonFinite(const Scene &scene, const Ray &cameraRay) {
 
 }  // namespace
 
-RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
+RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats) {
     std::unique_ptr<tbb::global_control> limit;
     if (nThreads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(nThreads));
@@ -69,11 +78,14 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
     constexpr int kTile = 16;
     const int nx = (bounds.Width() + kTile - 1) / kTile, ny = (bounds.Height() + kTile - 1) / kTile;
 
+    const int repeats = std::max(1, wavelengthRepeats);
     ProgressReporter progress(int64_t(bounds.Area()) * spp, "Rendering", quiet);
     double cpu0 = ProcessCPUSeconds();
+    std::atomic<uint64_t> scatterings{0};
 
     tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 1), [&](const tbb::blocked_range<int> &range) {
         pbrt::Sampler sampler = scene.sampler;
+        uint64_t depthSum = 0;
         for (int tile = range.begin(); tile != range.end(); ++tile) {
             int x0 = bounds.pMin.x + (tile % nx) * kTile, y0 = bounds.pMin.y + (tile / nx) * kTile;
             int x1 = std::min(x0 + kTile, bounds.pMax.x), y1 = std::min(y0 + kTile, bounds.pMax.y);
@@ -81,35 +93,53 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet) {
                 for (int x = x0; x < x1; ++x) {
                     Point2i p{x, y};
                     for (int s = 0; s < spp; ++s) {
-                        sampler.StartPixelSample(p, s);
-                        // Film position from the filter's distribution around the pixel centre.
-                        Point2f uFilter = sampler.GetPixel2D();
-                        FilterSample fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
-                                                                   : scene.filter.Sample(uFilter);
-                        Point2f pFilm(x + 0.5f + fs.p.x, y + 0.5f + fs.p.y);
-                        // Four wavelengths from one number: the seam for other samplers.
-                        Float uLambda = sampler.Get1D();
-                        SampledWavelengths lambda =
-                            scene.wavelengths.Sample(scene.disableWavelengthJitter ? 0.5f : uLambda);
-                        Point2f uLens = sampler.Get2D();
-                        Ray ray = scene.camera->GenerateRay(pFilm, uLens);
-                        SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth);
-                        if (!IsFinite(L)) {
-                            WarnNonFinite(scene, ray);
-                            L = SampledSpectrum(0);
+                        RGB rgb(0, 0, 0);
+                        FilterSample fs;
+                        for (int r = 0; r < repeats; ++r) {
+                            // A repeat replays the sample's numbers from its start; only the
+                            // wavelength number is shifted (r = 0: the sample as it is).
+                            sampler.StartPixelSample(p, s);
+                            // Film position from the filter's distribution around the pixel centre.
+                            Point2f uFilter = sampler.GetPixel2D();
+                            fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
+                                                          : scene.filter.Sample(uFilter);
+                            Point2f pFilm(x + 0.5f + fs.p.x, y + 0.5f + fs.p.y);
+                            // Four wavelengths from one number: the seam for other samplers.
+                            Float uLambda = sampler.Get1D();
+                            if (scene.disableWavelengthJitter) uLambda = 0.5f;
+                            if (r > 0) {
+                                uLambda += Float(r) / Float(repeats);
+                                uLambda -= std::floor(uLambda);
+                            }
+                            SampledWavelengths lambda = scene.wavelengths.Sample(uLambda);
+                            Point2f uLens = sampler.Get2D();
+                            Ray ray = scene.camera->GenerateRay(pFilm, uLens);
+                            int depth = 0;
+                            SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth, &depth);
+                            depthSum += uint64_t(depth);
+                            if (!IsFinite(L)) {
+                                WarnNonFinite(scene, ray);
+                                L = SampledSpectrum(0);
+                            }
+                            RGB c = film.ToRGB(L, lambda);
+                            if (repeats == 1) rgb = c;
+                            else rgb += c / Float(repeats);
                         }
-                        film.AddSample(p, film.ToRGB(L, lambda), fs.weight);
+                        film.AddSample(p, rgb, fs.weight);
                     }
                 }
             progress.Update(int64_t(x1 - x0) * (y1 - y0) * spp);
         }
+        scatterings += depthSum;
     });
     progress.Done();
 
     RenderStats stats;
     stats.wallSeconds = progress.ElapsedSeconds();
     stats.cpuSeconds = ProcessCPUSeconds() - cpu0;
-    stats.paths = uint64_t(bounds.Area()) * uint64_t(spp);
+    stats.paths = uint64_t(bounds.Area()) * uint64_t(spp) * uint64_t(repeats);
+    stats.scatterings = scatterings.load();
+    stats.wavelengthRepeats = repeats;
     return stats;
 }
 

@@ -18,22 +18,30 @@ struct Scene;
 
 struct RenderStats {
     double wallSeconds = 0, cpuSeconds = 0;
-    uint64_t paths = 0;
+    uint64_t paths = 0;        // camera paths traced (pixels x spp x wavelength repeats)
+    uint64_t scatterings = 0;  // surface hits of all those paths (PathLi's depth)
+    int wavelengthRepeats = 1;
 };
 
-// Renders into scene.film. nThreads 0 uses every core.
-RenderStats Render(const Scene &scene, int nThreads, bool quiet);
+// Renders into scene.film. nThreads 0 uses every core. wavelengthRepeats K > 1 traces each
+// camera sample K times, with the sampler's numbers replayed except the wavelength number u,
+// which becomes (u + k/K) mod 1, and adds their mean (--wavelength-repeats, design §5.2).
+RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats = 1);
 
 // The provenance an EXR image of the render records (with the film's "chromaticities" and
 // "colorSpace"):
 //   samplesPerPixel           int     samples per pixel (pbrt-v4's name)
 //   renderTimeSeconds         float   wall-clock seconds of the render (pbrt-v4's name)
 //   seed                      string  the sampler's seed, in decimal (EXR has no 64-bit int)
-//   wavelengthSampler         string  "visible", "uniform" or "table"
+//   wavelengthSampler         string  "visible", "uniform", "table" or "emission"
 //   wavelengthRange           v2f     the range it samples, in nm
 //   wavelengthTable           string  the table file as named (only with a table)
 //   wavelengthTableSHA256     string  SHA-256 of the table file's bytes, as sha256sum prints it
 //   wavelengthDefensiveShare  float   the uniform share mixed into the table (--wavelength-pdf-defensive)
+//   renderCPUSeconds          float   CPU seconds (user + system, all threads) of the render
+//   meanPathDepth             float   surfaces a camera path reached (at most maxdepth + 1), averaged
+//   wavelengthRepeats         int     K of --wavelength-repeats (only when K > 1)
+//   wavelengthEmissionWeight  string  with emission sampling: its weight, "spd", "luminance" or "xyz"
 ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats);
 
 // CPU time (user + system) used by this process so far, in seconds.

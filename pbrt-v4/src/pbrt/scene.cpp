@@ -1,5 +1,6 @@
 #include <pbrt/scene.h>
 
+#include <pbrt/emission.h>
 #include <pbrt/parser.h>
 #include <pbrt/util/color.h>
 #include <pbrt/util/output_path.h>
@@ -663,7 +664,8 @@ void SceneBuilder::EndOfFiles() {
     FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
                                            opts.resolution, opts.resolutionScale, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
-    if (opts.outfile.empty() && opts.emissionSpectrum.empty() && opts.materialReflectances.empty()) {
+    if (opts.outfile.empty() && opts.emissionSpectrum.empty() && opts.materialReflectances.empty() &&
+        opts.emissionTable.empty()) {
         try {
             CheckOutputImagePath(fs.filename);
         } catch (const PbrtError &e) {
@@ -701,13 +703,24 @@ void SceneBuilder::EndOfFiles() {
     else if (opts.wavelengthSampling == "visible") scene->wavelengths = WavelengthSampler::Visible();
     else if (opts.wavelengthSampling == "uniform")
         scene->wavelengths = WavelengthSampler::Uniform(opts.lambdaMin, opts.lambdaMax);
-    else throw PbrtError("unknown wavelength sampling \"" + opts.wavelengthSampling + "\"");
+    else if (opts.wavelengthSampling != "emission")
+        throw PbrtError("unknown wavelength sampling \"" + opts.wavelengthSampling + "\"");
 
     // Lights that need the scene bounds, and the light sampler.
     Light::ShareEqualSpectra(scene->lights);
     for (Light &l : scene->lights) l.Preprocess(scene->accel->Bounds());
     scene->lightSampler = LightSampler(scene->lights);
-    if (scene->lights.empty()) Warning("the scene has no lights; the image will be black");
+    if (scene->lights.empty())
+        Warning(opts.wavelengthSampling == "emission"
+                    ? "the scene has no lights; the image will be black (--wavelength-sampling "
+                      "emission has no emission to sample: visible sampling instead)"
+                    : "the scene has no lights; the image will be black");
+    // Emission sampling (design §1.7, §5.2): a table from the lights' power, which needs the
+    // scene's bounds (infinite lights); a light that makes it impossible stops pbrt here.
+    if (opts.wavelengthSampling == "emission" && !scene->lights.empty()) {
+        EmissionTable t = SceneEmissionTable(*scene, opts.emissionWeight);
+        scene->wavelengths = WavelengthSampler::FromEmission(t.table, t.weight, t.seconds);
+    }
     // design §1: a light emitting where the sampling density is zero biases the image.
     for (const std::string &w : UnsampledEmissionWarnings(scene->wavelengths, scene->lights)) Warning(w);
 }

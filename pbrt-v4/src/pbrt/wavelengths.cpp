@@ -4,6 +4,9 @@
 
 #include <wavelength_table.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
 #include <sstream>
 
 namespace pbrt {
@@ -43,6 +46,16 @@ Float TableWavelengthSampler::MaxLambda() const { return Float(table->grid.back(
 
 std::string TableWavelengthSampler::Description() const {
     std::ostringstream s;
+    if (!emissionWeight.empty()) {
+        s << "emission (the scene's emitted power"
+          << (emissionWeight == "luminance" ? " times ybar"
+              : emissionWeight == "xyz"     ? " times xbar + ybar + zbar"
+                                            : "")
+          << " in four equal-mass bands: " << table->grid.size() << " nodes, "
+          << table->grid.front() << ".." << table->grid.back() << " nm, built in "
+          << std::setprecision(3) << buildSeconds * 1e3 << " ms)";
+        return s.str();
+    }
     s << "table " << table->source << " (" << table->grid.size() << " nodes, "
       << table->grid.front() << ".." << table->grid.back() << " nm";
     if (share > 0) s << ", defensive share " << share;
@@ -64,13 +77,25 @@ WavelengthSampler WavelengthSampler::FromTable(const std::string &path, Float de
         std::istringstream text(bytes);
         wavelength_table::Table t = wavelength_table::ParseTable(text, path);
         if (defensiveShare > 0) t = wavelength_table::WithDefensiveMixture(t, defensiveShare);
-        return WavelengthSampler(TableWavelengthSampler{
-            std::make_shared<const wavelength_table::Table>(std::move(t)), defensiveShare, path,
-            SHA256Hex(bytes)});
+        TableWavelengthSampler sampler;
+        sampler.table = std::make_shared<const wavelength_table::Table>(std::move(t));
+        sampler.share = defensiveShare;
+        sampler.file = path;
+        sampler.sha256 = SHA256Hex(bytes);
+        return WavelengthSampler(std::move(sampler));
     } catch (const wavelength_table::TableError &e) {
         // Already "FILE:LINE: reason" (or "FILE: reason" for a missing file).
         throw PbrtError(e.what());
     }
+}
+
+WavelengthSampler WavelengthSampler::FromEmission(std::shared_ptr<const wavelength_table::Table> table,
+                                                  const std::string &weight, double buildSeconds) {
+    TableWavelengthSampler t;
+    t.table = std::move(table);
+    t.emissionWeight = weight;
+    t.buildSeconds = buildSeconds;
+    return WavelengthSampler(std::move(t));
 }
 
 WavelengthSampler WavelengthSampler::Visible() { return WavelengthSampler(VisibleWavelengthSampler{}); }
@@ -111,7 +136,7 @@ bool WavelengthSampler::IsTable() const {
 std::string WavelengthSampler::Name() const {
     if (std::holds_alternative<VisibleWavelengthSampler>(impl)) return "visible";
     if (std::holds_alternative<UniformWavelengthSampler>(impl)) return "uniform";
-    return "table";
+    return std::get<TableWavelengthSampler>(impl).emissionWeight.empty() ? "table" : "emission";
 }
 
 std::vector<std::pair<Float, Float>> WavelengthSampler::ZeroDensityIntervals() const {

@@ -50,11 +50,15 @@ struct UniformWavelengthSampler {
 // From a table: four wavelengths from one u, lambda_k = F_k^-1(u) for the four densities of a
 // table (patches/include/wavelength_table.h), each carrying the mixture density
 // (1/4) sum_k p_k(lambda) the film divides by (the balance heuristic, design §1).
+// Emission sampling (--wavelength-sampling emission) is the same sampler on a table built in
+// memory from the scene's lights (emission.h): it has no file, and names its weight.
 struct TableWavelengthSampler {
     std::shared_ptr<const wavelength_table::Table> table;  // already mixed with `share`
     Float share = 0;  // defensive uniform share mixed in (0: the table as written)
-    std::string file;    // the table file as named on the command line
+    std::string file;    // the table file as named on the command line (empty: emission)
     std::string sha256;  // SHA-256 of the bytes read from it (hexadecimal)
+    std::string emissionWeight;  // emission sampling: its weight (spd, luminance, xyz)
+    double buildSeconds = 0;     // emission sampling: the time to build the table
     SampledWavelengths Sample(Float u) const;
     Float PDF(Float lambda) const;
     std::string Description() const;
@@ -72,6 +76,10 @@ class WavelengthSampler {
     // PbrtError "FILE:LINE: reason". defensiveShare in [0, 1] mixes each density with a
     // uniform density over the table's range (the fix for zero densities, design §1).
     static WavelengthSampler FromTable(const std::string &path, Float defensiveShare = 0);
+    // Emission sampling: the table the scene's lights give (emission.h, SceneEmissionTable),
+    // built with `weight` in `buildSeconds`; sampled exactly as a table file is.
+    static WavelengthSampler FromEmission(std::shared_ptr<const wavelength_table::Table> table,
+                                          const std::string &weight, double buildSeconds);
 
     // Four wavelengths (and the per-wavelength densities the film divides by) from one u.
     SampledWavelengths Sample(Float u) const;
@@ -81,11 +89,12 @@ class WavelengthSampler {
     std::string Description() const;
     Float MinLambda() const;
     Float MaxLambda() const;
-    // Whether this samples from a table (FromTable).
+    // Whether this samples from a table (FromTable or FromEmission).
     bool IsTable() const;
-    // "visible", "uniform" or "table": the kind, as the command line names it.
+    // "visible", "uniform", "table" or "emission": the kind, as the command line names it.
     std::string Name() const;
-    // The table sampler (its file, hash and defensive share); nullptr unless IsTable().
+    // The table sampler (its file, hash and defensive share, or its emission weight);
+    // nullptr unless IsTable().
     const TableWavelengthSampler *Table() const { return std::get_if<TableWavelengthSampler>(&impl); }
     // Stretches [a, b] nm inside [MinLambda(), MaxLambda()] where PDF is zero (a table whose
     // four densities vanish together); empty for the built-in samplers.

@@ -5,6 +5,9 @@
 #include <pbrt/scene.h>
 #include <pbrt/util/output_path.h>
 
+#include <wavelength_table.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -31,8 +34,17 @@ Output:
   --resolution WxH             render at W x H pixels instead of the film's resolution
   --resolution-scale S         multiply the film's (or --resolution's) resolution by S
 Wavelengths (four per path from one random number):
-  --wavelength-sampling NAME   visible  pbrt-v4's visible sampling over 360-830 nm (default)
-                               uniform  stratified uniform over --wavelength-range
+  --wavelength-sampling NAME   visible   pbrt-v4's visible sampling over 360-830 nm (default)
+                               uniform   stratified uniform over --wavelength-range
+                               emission  the scene's own lamps: their emitted power (as
+                                         --emission-spectrum sums it) cut into four
+                                         equal-mass bands, a table built at scene load
+                                         (design §1.7; nothing to install, no file). Use it
+                                         for spiky lamps (fluorescent, LED, metal halide,
+                                         sodium); an optimized table (--wavelength-pdf)
+                                         where the benchmark shows it pays more
+  --emission-weight W          with emission: spd (the emitted power alone, default),
+                               luminance (times ybar) or xyz (times xbar + ybar + zbar)
   --wavelength-range LO HI     range of uniform sampling in nm (default 360 830)
   --wavelength-pdf FILE        sample from a wavelength table (design §1, §2: four
                                densities on one grid, one u per path, balance heuristic);
@@ -40,6 +52,10 @@ Wavelengths (four per path from one random number):
   --wavelength-pdf-defensive S mix a uniform share S in [0, 1] into each density of the
                                table, over the table's range (e.g. 0.01): removes zero
                                sampling density where a light emits, which biases the image
+  --wavelength-repeats K       trace each camera sample K times with the same random
+                               numbers but the wavelength number shifted by k/K, and
+                               average: wavelength noise averaged away at K times the cost
+                               (the benchmark's floor, design §5.2; default 1)
 Scene:
   --emission-spectrum FILE     render nothing: write the scene's total emitted spectral
                                power (pbrt-v4's light power summed over its lights) to FILE
@@ -49,6 +65,10 @@ Scene:
                                materials the scene's shapes use (RGB through the
                                renderer's own tables, textures by their mean) to FILE as
                                a CSV, one column per material (design §3.4, §5.6)
+  --emission-table FILE        render nothing: write the table --wavelength-sampling
+                               emission samples from (with --emission-weight) to FILE as
+                               a wavelength table CSV (design §2), for renderers that
+                               read tables
 Other:
   --quiet                      no progress bar or summary
   --version                    the version of pbrt (the project's) and exit
@@ -83,7 +103,7 @@ double ParseFloat(const std::string &flag, const char *s) {
 int main(int argc, char **argv) {
     RenderOptions opts;
     std::vector<std::string> files;
-    bool hasDefensive = false, hasBuiltinSampling = false;
+    bool hasDefensive = false, hasBuiltinSampling = false, hasRange = false, hasWeight = false;
 
     // Flags take "--flag value" or "--flag=value".
     for (int i = 1; i < argc; ++i) {
@@ -139,9 +159,18 @@ int main(int argc, char **argv) {
             if (!(opts.resolutionScale > 0)) Usage("--resolution-scale must be positive");
         } else if (flag == "--wavelength-sampling") {
             opts.wavelengthSampling = value();
-            if (opts.wavelengthSampling != "visible" && opts.wavelengthSampling != "uniform")
-                Usage("--wavelength-sampling: expected visible or uniform, got \"" + opts.wavelengthSampling + "\"");
+            if (opts.wavelengthSampling != "visible" && opts.wavelengthSampling != "uniform" &&
+                opts.wavelengthSampling != "emission")
+                Usage("--wavelength-sampling: expected visible, uniform or emission, got \"" +
+                      opts.wavelengthSampling + "\"");
+        } else if (flag == "--emission-weight") {
+            hasWeight = true;
+            opts.emissionWeight = value();
+            const std::vector<std::string> &weights = EmissionWeights();
+            if (std::find(weights.begin(), weights.end(), opts.emissionWeight) == weights.end())
+                Usage("--emission-weight: expected spd, luminance or xyz, got \"" + opts.emissionWeight + "\"");
         } else if (flag == "--wavelength-range") {
+            hasRange = true;
             if (hasInline) Usage("--wavelength-range takes two values: --wavelength-range LO HI");
             if (i + 2 >= argc) Usage("--wavelength-range needs two values");
             opts.lambdaMin = Float(ParseFloat(flag, argv[++i]));
@@ -151,12 +180,17 @@ int main(int argc, char **argv) {
         } else if (flag == "--emission-spectrum") {
             opts.emissionSpectrum = value();
             if (opts.emissionSpectrum.empty()) Usage("--emission-spectrum needs a file name");
+        } else if (flag == "--emission-table") {
+            opts.emissionTable = value();
+            if (opts.emissionTable.empty()) Usage("--emission-table needs a file name");
         } else if (flag == "--material-reflectances") {
             opts.materialReflectances = value();
             if (opts.materialReflectances.empty()) Usage("--material-reflectances needs a file name");
         } else if (flag == "--wavelength-pdf") {
             opts.wavelengthTable = value();
             if (opts.wavelengthTable.empty()) Usage("--wavelength-pdf needs a file name");
+        } else if (flag == "--wavelength-repeats") {
+            opts.wavelengthRepeats = int(ParseInt(flag, value(), 1, 1 << 16));
         } else if (flag == "--wavelength-pdf-defensive") {
             hasDefensive = true;
             opts.defensiveShare = Float(ParseFloat(flag, value()));
@@ -171,6 +205,11 @@ int main(int argc, char **argv) {
         Usage("--wavelength-pdf-defensive needs --wavelength-pdf");
     if (hasBuiltinSampling && !opts.wavelengthTable.empty())
         Usage("--wavelength-pdf replaces --wavelength-sampling/--wavelength-range: give one or the other");
+    if (hasRange && opts.wavelengthSampling == "emission")
+        Usage("--wavelength-range is for uniform sampling; emission sampling covers 360-830 nm "
+              "(wherever the scene's lights emit)");
+    if (hasWeight && opts.wavelengthSampling != "emission" && opts.emissionTable.empty())
+        Usage("--emission-weight needs --wavelength-sampling emission (or --emission-table)");
 
     try {
         // A bad wavelength table stops pbrt before the scene is even parsed (the scene
@@ -179,17 +218,33 @@ int main(int argc, char **argv) {
             WavelengthSampler::FromTable(opts.wavelengthTable, opts.defensiveShare);
         // Fail before parsing and rendering, not after, when the image cannot be written
         // there (the scene builder checks the film's "filename" the same way).
-        if (!opts.emissionSpectrum.empty() || !opts.materialReflectances.empty()) {
+        if (!opts.emissionSpectrum.empty() || !opts.materialReflectances.empty() ||
+            !opts.emissionTable.empty()) {
             // Scene queries (design §5.6): everything is computed before anything is written.
-            for (const std::string &p : {opts.emissionSpectrum, opts.materialReflectances})
+            for (const std::string &p : {opts.emissionSpectrum, opts.materialReflectances, opts.emissionTable})
                 if (!p.empty()) CheckOutputFilePath(p);
             std::unique_ptr<Scene> scene = LoadScene(files, opts);
             std::optional<EmissionSpectrum> e;
             std::optional<MaterialReflectances> m;
+            std::optional<EmissionTable> t;
             if (!opts.emissionSpectrum.empty()) e = SceneEmissionSpectrum(*scene);
             if (!opts.materialReflectances.empty()) m = SceneMaterialReflectances(*scene);
+            if (!opts.emissionTable.empty()) {
+                if (scene->lights.empty()) (void)SceneEmissionSpectrum(*scene);  // "no emitters"
+                t = SceneEmissionTable(*scene, opts.emissionWeight);
+            }
             if (e) WriteEmissionSpectrum(opts.emissionSpectrum, *e);
             if (m) WriteMaterialReflectances(opts.materialReflectances, *m);
+            if (t) {
+                std::string source;
+                for (const std::string &f : files) source += (source.empty() ? "" : " ") + f;
+                WriteEmissionTable(opts.emissionTable, *t, source.empty() ? "<standard input>" : source);
+            }
+            if (!opts.quiet && t)
+                std::fprintf(stderr, "pbrt: wrote %s: the emission-sampling table (%s weight), %zu "
+                                     "nodes, built in %.3g ms\n",
+                             opts.emissionTable.c_str(), t->weight.c_str(), t->table->grid.size(),
+                             t->seconds * 1e3);
             if (!opts.quiet && e)
                 std::fprintf(stderr, "pbrt: wrote %s: the emitted spectral power at %zu wavelengths\n",
                              opts.emissionSpectrum.c_str(), e->lambdas.size());
@@ -207,7 +262,7 @@ int main(int argc, char **argv) {
                          fs.pixelBounds.Width(), fs.pixelBounds.Height(),
                          scene->sampler.SamplesPerPixel(), scene->sampler.Description().c_str(),
                          scene->integrator.maxDepth, scene->wavelengths.Description().c_str());
-        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet);
+        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet, opts.wavelengthRepeats);
         scene->film->WriteImage(outfile, RenderMetadata(*scene, stats));
         if (!opts.quiet)
             std::fprintf(stderr,

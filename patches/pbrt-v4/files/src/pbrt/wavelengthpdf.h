@@ -8,8 +8,9 @@
 // the device read through a TableView held in a global (a __constant__ on the device).
 //
 // Only the files that sample wavelengths or terminate secondary wavelengths include this
-// header, so that applying the patch recompiles few files. Without --wavelength-pdf every
-// function here does exactly what upstream pbrt-v4 does.
+// header, so that applying the patch recompiles few files. Without --wavelength-pdf (and
+// without --wavelength-sampling emission, which builds such a table from the scene's lights)
+// every function here does exactly what upstream pbrt-v4 does.
 #ifndef PBRT_WAVELENGTHPDF_H
 #define PBRT_WAVELENGTHPDF_H
 
@@ -55,7 +56,11 @@ PBRT_CPU_GPU inline const WavelengthTableState &GetWavelengthTable() {
 // and exits with status 1), mixes in the defensive share (the text of
 // --wavelength-pdf-defensive, empty for none), and makes it visible to the CPU and, with
 // --gpu, to the device. An empty path leaves upstream's sampling in place.
-void InitWavelengthTable(const std::string &path, const std::string &defensiveShare);
+// `sampling` is --wavelength-sampling ("", "visible" or "emission") and `emissionWeight`
+// --emission-weight ("", "spd", "luminance" or "xyz"); "emission" asks for the table that
+// InitEmissionWavelengthTable builds once the lights exist. Bad combinations exit with 1.
+void InitWavelengthTable(const std::string &path, const std::string &defensiveShare,
+                         const std::string &sampling, const std::string &emissionWeight);
 
 // Warns (once per light directive) where the table's mixture density is zero but the light
 // of `lightName` with `params` emits: an interior gap, or more than 1e-4 of its luminance
@@ -63,6 +68,31 @@ void InitWavelengthTable(const std::string &path, const std::string &defensiveSh
 class ParameterDictionary;
 void WarnUnsampledEmission(const std::string &lightName, const ParameterDictionary &params,
                            const FileLoc *loc);
+
+// --wavelength-sampling emission (design §1.7): the scene's emitted spectral power
+// Phi(lambda) = sum over lights of Light::Phi (upstream's light power), times the weight,
+// cut into four equal-mass densities (wavelength_table::EqualMassTable) and sampled as a
+// --wavelength-pdf table is. Upstream's lights hold their spectra at whole nanometres
+// (DenselySampledSpectrum: the value of the nearest nm), so Phi is taken at 360, 361, ...,
+// 830 nm and the table is that step function (0.002 nm hand-overs at the half-nanometres).
+// Lights whose emission is an RGB image (image infinite, portal, projection and image area
+// lights) count as their colour space's illuminant times their power, measured once at four
+// wavelengths (Phi over every nanometre would read the whole image 118 times).
+//
+// The Note* functions remember where each light was defined (for error messages) while the
+// scene is parsed and its lights created; all of them are no-ops without
+// --wavelength-sampling emission.
+class Light;
+void NoteLightSource(const std::string &lightName, const ParameterDictionary &params,
+                     const FileLoc *loc);                    // in BasicScene::AddLight order
+void NoteLightSourceCreated(size_t index, const Light &light);  // the index-th AddLight's light
+void NoteAreaLight(const Light &light, const ParameterDictionary &params, const FileLoc *loc);
+// Builds the table from the lights (after Light::Preprocess, which infinite lights need) and
+// installs it for the CPU and the GPU. A light whose power is not finite (a blackbody of
+// 0 K, an overflowing scale) or a scene whose lights emit nothing between 360 and 830 nm
+// prints "pbrt: FILE:LINE:COL: reason" naming the light and exits with status 1; a scene
+// without lights keeps upstream's sampling (with a warning).
+void InitEmissionWavelengthTable(const Light *lights, size_t count);
 
 // SampledWavelengths keeps lambda and pdf private and has no factory for arbitrary pdfs;
 // this struct has its layout (util/spectrum.h: `pstd::array<Float, NSpectrumSamples> lambda,

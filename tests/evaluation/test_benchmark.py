@@ -1,0 +1,162 @@
+"""The benchmark (design §6.7): its measures on synthetic images, its grid, and its small
+version end to end with the real renderer (tiny images): every sampler row unbiased, the
+visible table matching pbrt-v4's own visible sampling, the measures agreeing with each other,
+and a second run rendering nothing."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wavelength_pdf.evaluation.benchmark import grid as G
+from wavelength_pdf.evaluation.benchmark import measures as M
+
+
+def _image(rng, shape=(40, 50), level=0.3):
+    return level * (0.5 + rng.random(shape + (3,)))
+
+
+# --- Measures --------------------------------------------------------------------------
+
+
+def test_pair_mse_is_the_variance_of_one_image():
+    """Two independent images with per-pixel noise of variance s^2: (a - b)^2 / 2 estimates
+    s^2, with no reference involved."""
+    rng = np.random.default_rng(1)
+    exact = _image(rng)
+    s = 0.02
+    a = exact + s * rng.standard_normal(exact.shape)
+    b = exact + s * rng.standard_normal(exact.shape)
+    truth = M.Truth.of(exact, exact, exact)
+    m = M.pair(a, b, truth)
+    assert m["mse"] == pytest.approx(s * s, rel=0.05)
+    # Against an exact reference, the squared CIEDE2000 of one image and the seed-pair figure
+    # measure the same thing (to first order in the noise).
+    assert m["de2_ref"] == pytest.approx(m["de2"], rel=0.1)
+    assert m["de"] > 0 and m["chroma2"] > 0 and m["chroma2"] < m["de2"] * 10
+
+
+def test_reference_noise_subtracts():
+    """A noisy reference inflates the error against it by its own noise, which its two halves
+    measure: de2_ref (noise subtracted) stays at the seed-pair figure."""
+    rng = np.random.default_rng(2)
+    exact = _image(rng)
+    s, st = 0.02, 0.015
+    a, b = (exact + s * rng.standard_normal(exact.shape) for _ in range(2))
+    h1, h2 = (exact + st * np.sqrt(2) * rng.standard_normal(exact.shape) for _ in range(2))
+    truth = M.Truth.of((h1 + h2) / 2, h1, h2)
+    m = M.pair(a, b, truth)
+    assert truth.de2 > 0.2 * m["de2"]  # the reference's noise is not negligible here ...
+    assert m["de2_ref"] == pytest.approx(m["de2"], rel=0.1)  # ... and is subtracted
+
+
+def test_bias_z_sees_a_bias_and_not_noise():
+    rng = np.random.default_rng(3)
+    exact = _image(rng)
+    noisy = lambda: exact + 0.05 * rng.standard_normal(exact.shape)  # noqa: E731
+    assert np.all(np.abs(M.bias_z(noisy(), noisy(), exact)) < 4)
+    assert np.all(np.abs(M.bias_z(noisy() * 1.05, noisy() * 1.05, exact)) > 6)
+
+
+def test_lit_pixels_leave_out_emitters_seen_directly():
+    img = np.full((10, 10, 3), 0.2)
+    img[0, :3] = 50.0  # the lamp
+    mask = M.lit_pixels(img)
+    assert mask.sum() == 97 and not mask[0, :3].any()
+
+
+def test_shares_and_equal_time():
+    assert M.removed_share(1.0, 10.0, 1.0) == 1.0
+    assert M.removed_share(10.0, 10.0, 1.0) == 0.0
+    assert M.removed_share(5.5, 10.0, 1.0) == pytest.approx(0.5)
+    assert np.isnan(M.removed_share(1.0, 1.0, 1.0))
+    # A sampler with half the error at twice the time per sample is even at equal time.
+    assert M.equal_time_ratio(0.5, 2.0, 1.0, 1.0) == pytest.approx(1.0)
+    assert M.equal_time_ratio(0.5, 2.0, 1.0, 1.0, slope=2.0) == pytest.approx(2.0)
+
+
+# --- Grid ------------------------------------------------------------------------------
+
+
+def test_grid_has_the_lamps_and_scenes_it_promises():
+    kinds = {}
+    for lamp in G.LAMPS.values():
+        kinds.setdefault(lamp.kind, []).append(lamp.key)
+    assert len(kinds["LED"]) >= 4 and len(kinds["fluorescent"]) >= 4 and len(kinds["metal halide"]) >= 2
+    assert {"cie-FL2", "cie-FL11", "2536", "cie-D65"} <= set(G.LAMPS)
+    assert len(G.LAMPS) >= 12
+    g = G.GridSpec(shared=G.SHARED)
+    for lamp in ("2482", "2641"):
+        G.add(g, G.Job(G.SCENES["cornell-box"], G.LAMPS[lamp], sweep="lamps", spp=(16, 64)))
+    G.add(g, G.Job(G.SCENES["cornell-box"], G.LAMPS["2482"], sweep="scenes"))
+    if G.SCENES["cornell-box"].available(G.SHARED):
+        # The same job in both sweeps runs once, with both sweeps' sample counts.
+        assert [j.name for j in g.jobs] == ["cornell-box/2482/sobol", "cornell-box/2641/sobol"]
+        assert g.jobs[0].sweep == "lamps+scenes" and g.jobs[0].spp == (16, 64, 256)
+        assert [j.name for j in G.select(g, ["scenes"]).jobs] == ["cornell-box/2482/sobol"]
+    else:
+        assert not g.jobs and len(g.skipped) == 3
+
+
+# --- The small benchmark, end to end -----------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory, pbrt):
+    from wavelength_pdf.evaluation.benchmark import run_benchmark
+
+    out = tmp_path_factory.mktemp("benchmark")
+    said: list[str] = []
+    rows = run_benchmark(G.small_grid(), out, workers=2, pbrt=pbrt, say=said.append)
+    return out, rows, said, pbrt
+
+
+def _rows(rows, **what):
+    return [r for r in rows if all(r[k] == v for k, v in what.items())]
+
+
+def test_every_sampler_is_unbiased(small):
+    """Image means agree with the reference's within noise, for every row at the higher spp
+    (the reference is drawn with four other samplers, none of them the row's own table)."""
+    _, rows, _, _ = small
+    top = max(r["spp"] for r in rows)
+    checked = _rows(rows, spp=top)
+    assert {r["row"] for r in checked} >= {*G.SIMPLE, "start", G.BUILTIN, G.FLOOR}
+    for r in checked:
+        assert r["bias_z"] < 5, f"{r['job']} {r['row']}: |z| = {r['bias_z']:.2f}"
+
+
+def test_visible_table_matches_pbrt_visible(small):
+    """The visible table and pbrt-v4's own visible sampling have the same error within noise
+    with independent pixel samples (the same four quantiles; with a stratified pixel sampler
+    the table's order of u stratifies them better, so it can only do better there)."""
+    _, rows, _, _ = small
+    for r in _rows(rows, row="visible", pixel_sampler="independent"):
+        b = _rows(rows, job=r["job"], row=G.BUILTIN, spp=r["spp"])[0]
+        assert 1 / 1.8 < r["de2"] / b["de2"] < 1.8, (r["job"], r["spp"], r["de2"], b["de2"])
+
+
+def test_measures_agree_and_sampling_the_lamp_pays(small):
+    _, rows, _, _ = small
+    agree = [r["de2_ref"] / r["de2"] for r in rows if r["de2"] > 0]
+    assert 0.75 < np.median(agree) < 1.35
+    # Under the tri-band lamp, stratified sampling of the lamp beats stratified uniform
+    # sampling by a wide margin, and the floor is below every sampler.
+    for r in _rows(rows, row="spd", spp=16):
+        if r["lamp"] == "tri-band":
+            u = _rows(rows, job=r["job"], row="uniform", spp=16)[0]
+            f = _rows(rows, job=r["job"], row=G.FLOOR, spp=16)[0]
+            assert u["de2"] > 2 * r["de2"] > 2 * 0.5 * f["de2"]
+
+
+def test_outputs_and_resume(small):
+    from wavelength_pdf.evaluation.benchmark import run_benchmark
+
+    out, rows, said, pbrt = small
+    for name in ("results.csv", "report.md", "error-vs-spp.png"):
+        assert (out / name).is_file()
+    text = (out / "report.md").read_text()
+    assert "## Checks" in text and "Regime map" in text
+    again: list[str] = []
+    rows2 = run_benchmark(G.small_grid(), out, workers=1, pbrt=pbrt, say=again.append)
+    assert any("every render is done" in s for s in again), again
+    assert [r["de2"] for r in rows2] == [r["de2"] for r in rows]
