@@ -39,6 +39,7 @@ jitted functions compile once per size class rather than once per spectrum.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -722,6 +723,10 @@ def enable_compilation_cache() -> str | None:
     The directory is ``$WAVELENGTH_PDF_JAX_CACHE`` if set (empty or ``off`` disables the
     cache), else ``$XDG_CACHE_HOME/wavelength-pdf/jax`` (``~/.cache/...``). The cache only
     holds compiled code: results do not depend on it. Returns the directory, or None.
+
+    Compiled code from the folder runs in this process, so a folder that another user owns
+    or that group or others may write to is not used (one warning, no cache; design §7); the
+    executables kept by ``aot`` also carry a digest under the user's own key.
     """
     global _cache_dir
     if _cache_dir is not None:
@@ -736,7 +741,16 @@ def enable_compilation_cache() -> str | None:
         base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
         path = Path(base) / "wavelength-pdf" / "jax"
     try:
-        path.mkdir(parents=True, exist_ok=True)
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+        unsafe = aot.check_cache_folder(path)
+        if unsafe:
+            warnings.warn(f"not using the compile cache {path}: {unsafe}; compiled code there "
+                          "could have been written by someone else (make it yours with "
+                          "chmod 700, or set WAVELENGTH_PDF_JAX_CACHE to another folder)",
+                          RuntimeWarning, stacklevel=2)
+            _cache_dir = ""
+            aot.enable(None)
+            return None
         jax.config.update("jax_compilation_cache_dir", str(path))
         aot.enable(path / "executables")
         # Every compiled function, however quick to compile: a process compiles ~30.
