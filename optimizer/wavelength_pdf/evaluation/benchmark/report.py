@@ -247,6 +247,54 @@ def weight_wins(rows: Sequence[dict], spp: int, measure: str = MAIN) -> dict[str
     return wins
 
 
+def _ratio(rows, job, a: str, b: str, spp: int, measure: str = MAIN) -> float:
+    """Error of row ``a`` over row ``b`` on a job at spp (nan where either is missing)."""
+    ra, rb = _get(rows, job, a, spp), _get(rows, job, b, spp)
+    return ra[measure] / rb[measure] if ra and rb and rb[measure] > 0 else float("nan")
+
+
+def _spread(values: Sequence[float]) -> str:
+    v = [x for x in values if math.isfinite(x)]
+    if not v:
+        return "–"
+    return f"{np.median(v):.2f} ({min(v):.2f}-{max(v):.2f})" if len(v) > 1 else f"{v[0]:.2f}"
+
+
+def regimes(rows: Sequence[dict]) -> list[tuple[str, list[str]]]:
+    """The jobs grouped by regime: the lamp's kind (own-lamp scenes apart) and pixel sampler."""
+    groups: dict[str, list[str]] = {}
+    for j in jobs_of(rows):
+        r = next(x for x in rows if x["job"] == j)
+        groups.setdefault(f"{r['kind']}, {r['pixel_sampler']}", []).append(j)
+    return sorted(groups.items())
+
+
+def summary_table(rows: Sequence[dict], spp: int, measure: str = MAIN) -> str:
+    """Markdown: per regime, median (range) over its jobs of the table's gain over the best
+    simple sampler, over the ``spd`` table (emission sampling), over uniform and visible; the
+    ``spd`` table's gain over pbrt-v4's visible sampling; the share of the removable error the
+    table and the ``spd`` table remove; how often the table pays (``PAYS``)."""
+    head = ("| regime | jobs | best simple / table | spd / table | uniform / table | visible / table | "
+            "visible (pbrt-v4) / spd | table removes | spd removes | table pays |\n|" + "---|" * 10 + "\n")
+    lines = []
+    for name, js in regimes(rows):
+        js = [j for j in js if _table(rows, j, spp)]
+        if not js:
+            continue
+        g = [gain(rows, j, spp, measure) for j in js]
+        opt = [_table(rows, j, spp)["row"] for j in js]
+        spd_share = [100 * (_get(rows, j, "spd", spp) or {}).get("share_removed_de2", float("nan")) for j in js]
+        pays = sum(1 for x in g if math.isfinite(x) and x >= PAYS)
+        lines.append(f"| {name} | {len(js)} | {_spread(g)} | "
+                     f"{_spread([_ratio(rows, j, 'spd', o, spp, measure) for j, o in zip(js, opt)])} | "
+                     f"{_spread([_ratio(rows, j, 'uniform', o, spp, measure) for j, o in zip(js, opt)])} | "
+                     f"{_spread([_ratio(rows, j, 'visible', o, spp, measure) for j, o in zip(js, opt)])} | "
+                     f"{_spread([_ratio(rows, j, G.BUILTIN, 'spd', spp, measure) for j in js])} | "
+                     f"{_spread([100 * _table(rows, j, spp)['share_removed_de2'] for j in js])} % | "
+                     f"{_spread(spd_share)} % | {pays} of {len(js)} |")
+    return head + "\n".join(lines) + "\n"
+
+
 def write_markdown(path: Path, rows: Sequence[dict], scores: Sequence[dict], et: Sequence[dict], spp: int,
                    command: str, images: Sequence[str]) -> None:
     """The report: checks, the ratio tables of both sweeps, equal time, the regime map."""
@@ -281,6 +329,10 @@ def write_markdown(path: Path, rows: Sequence[dict], scores: Sequence[dict], et:
     wins = weight_wins(rows, spp)
     L.append(f"- Best stratified weight ({spp} spp, `{MAIN}`): " + ", ".join(f"{k} {v}" for k, v in wins.items())
              + " jobs.\n")
+    for n in sorted({r["spp"] for r in rows}):
+        L.append(f"## Summary by regime, {n} spp\n\nMedian (min-max) over the regime's jobs of `{MAIN}` ratios; "
+                 f"\"table pays\": the table beats the best simple sampler by {PAYS}x or more.\n")
+        L.append(summary_table(rows, n))
     for sweep, title in (("scenes", "Scene sweep"), ("lamps", "Lamp sweep"), ("small", "Small grid")):
         for ps in ("sobol", "independent"):
             js = jobs_of(rows, sweep, ps)
