@@ -179,3 +179,10 @@ def test_outputs_and_resume(small):
     rows2 = run_benchmark(G.small_grid(), out, workers=1, pbrt=pbrt, say=again.append)
     assert any("every render is done" in s for s in again), again
     assert [r["de2"] for r in rows2] == [r["de2"] for r in rows]
+    # A grid stopped early: --no-render scores the finished jobs and names the others.
+    victim = next((out / "jobs" / "two-lamp-box").rglob("renders/*.exr"))
+    victim.unlink()
+    partial: list[str] = []
+    rows3 = run_benchmark(G.small_grid(), out, pbrt=pbrt, render=False, say=partial.append)
+    assert {r["job"] for r in rows3} == {r["job"] for r in rows} - {"two-lamp-box/own/sobol"}
+    assert any("not finished" in s and "two-lamp-box/own/sobol" in s for s in partial), partial

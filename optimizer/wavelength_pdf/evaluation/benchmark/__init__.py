@@ -46,6 +46,16 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     plans = [run.plan_job(job, out, spec.shared, pbrt) for job in spec.jobs]
     if render:
         run.run(plans, workers=workers, scheduler=scheduler, nthreads=nthreads, say=say)
+    else:
+        # A grid stopped early: score the finished jobs, name the others.
+        done = [p for p in plans if run.finished(p)]
+        if len(done) < len(plans):
+            kept = {id(p) for p in done}
+            say(f"benchmark: {len(plans) - len(done)} of {len(plans)} jobs are not finished and left out of the "
+                "report: " + ", ".join(p.job.name for p in plans if id(p) not in kept))
+        if not done:
+            raise ValueError("benchmark: no job is finished; run without --no-render first")
+        plans = done
     scores = [run.score(p) for p in plans]
     rows = report.flatten(scores)
     report.write_csv(out / "results.csv", rows)

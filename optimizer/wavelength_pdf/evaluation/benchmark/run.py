@@ -214,8 +214,10 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
             + (f"; {len(optimize)} table(s) to optimize first (not in the estimate)" if optimize else ""))
         made = {path: client.submit(_table_task, sp, path, refl, pure=False) for path, (sp, refl) in optimize.items()}
         futures = []
-        # Cheap renders first, so that a job's scores can be read early; rows interleaved.
-        for p, r in sorted(todo, key=lambda pr: pr[1].spp * _repeats(pr[1])):
+        # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),
+        # cheap renders first within a job.
+        order = {id(p): (priority(p.job), i) for i, p in enumerate(plans)}
+        for p, r in sorted(todo, key=lambda pr: (order[id(pr[0])], pr[1].spp * _repeats(pr[1]))):
             deps = [made[t] for t in _tables_of(r) if t in made]
             futures.append(client.submit(cluster.render_task, r, nthreads, slots, *deps, pure=False))
         with progress.bar(total=len(futures), desc="benchmark", file=sys.stderr, unit="render") as bar:
@@ -224,6 +226,27 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
                 bar.update(1)
         for t, f in made.items():
             f.result()
+
+
+def priority(job: G.Job) -> int:
+    """The order in which jobs are rendered (lower first): the scene sweep's low-discrepancy
+    jobs under the compact fluorescent lamp or the scene's own lamps, the lamp sweep's
+    ColorChecker, the same scene jobs with independent samples, the rest of the scene sweep,
+    the rest of the lamp sweep."""
+    headline = job.lamp is None or job.lamp.key == G.SCENE_COLOURS_LAMP
+    scenes = "scenes" in job.sweep.split("+")
+    if scenes and headline:
+        return 0 if job.pixel_sampler == "sobol" else 2
+    if not scenes and job.scene.key == G.LAMP_SWEEP_SCENES[0]:
+        return 1
+    if scenes:
+        return 3 if job.pixel_sampler == "sobol" else 5
+    return 4
+
+
+def finished(p: JobPlan) -> bool:
+    """Every render of the job is there with its inputs unchanged."""
+    return all(r.done() is not None for r in p.renders())
 
 
 def _tables_of(r: RenderJob) -> list[Path]:
