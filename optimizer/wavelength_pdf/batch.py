@@ -193,15 +193,18 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
     else:
         # JAX is not fork-safe: workers are spawned (and inherit PJRT_NPROC).
         ctx = multiprocessing.get_context("spawn")
-        with cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
-                                    initargs=(os.getpid(),)) as pool:
-            try:
-                for fut in cf.as_completed([pool.submit(run_job, job) for job in todo]):
-                    rows.append(fut.result())
-                    report(rows[-1])
-            except BaseException:
-                _stop_workers(pool)
-                raise
+        # Not a with-block: its exit would wait for the executor again after an interrupt,
+        # when the workers are already being stopped.
+        pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
+                                      initargs=(os.getpid(),))
+        try:
+            for fut in cf.as_completed([pool.submit(run_job, job) for job in todo]):
+                rows.append(fut.result())
+                report(rows[-1])
+        except BaseException:
+            _stop_workers(pool)
+            raise
+        pool.shutdown(wait=True)
     rows.sort(key=lambda r: r["input"])
     summary = outdir / "summary.csv"
     tmp = summary.with_name(f".{summary.name}.tmp")

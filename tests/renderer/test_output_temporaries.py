@@ -18,9 +18,9 @@ from pathlib import Path
 
 import pytest
 
-#: 1500 x 1500 pixels at 1 spp: a few seconds to render, ~0.3 s to write as PNG.
+#: 2000 x 2000 pixels at 1 spp: a few seconds to render, ~0.5 s to write as PNG.
 SCENE = """\
-Film "rgb" "integer xresolution" [ 1500 ] "integer yresolution" [ 1500 ]
+Film "rgb" "integer xresolution" [ 2000 ] "integer yresolution" [ 2000 ]
 Sampler "independent" "integer pixelsamples" [ 1 ]
 WorldBegin
 LightSource "infinite"
@@ -59,15 +59,19 @@ def scene(tmp_path: Path) -> Path:
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
 def test_signal_while_writing_leaves_no_temporary(pbrt, scene, tmp_path, sig):
     out = tmp_path / "out.png"
-    for _ in range(3):  # the temporary may come and go between two polls; try again then
+    caught = 0
+    for _ in range(6):
+        # The temporary may come and go between two polls, or pbrt may finish between the
+        # poll and the signal on a busy machine (exit 0, the image in place): try again then.
         status, seen = stop_while_writing(pbrt, scene, out, sig)
-        if seen:
+        # Whatever happened, never a part of the image beside it.
+        assert leftovers(out) == [], f"left behind: {leftovers(out)}"
+        if seen and status != 0:
+            assert status == -sig, f"pbrt exited with {status}, not by the signal"
+            caught += 1
             break
         out.unlink(missing_ok=True)
-    assert seen, "pbrt finished before its temporary was seen: the test cannot tell"
-    assert status == -sig, f"pbrt exited with {status}, not by the signal"
-    # The image itself may exist (renamed into place before the signal came), never a part.
-    assert leftovers(out) == [], f"left behind: {leftovers(out)}"
+    assert caught, "pbrt always finished before the signal came: the test cannot tell"
 
 
 def test_next_run_removes_the_temporary_of_a_killed_pbrt(pbrt, scene, tmp_path):
