@@ -141,8 +141,9 @@ def add_subcommands(sub) -> None:
                                      "the sun; the staircase (D65, 2641); the glass of water (D65, A, 2482). The "
                                      "report shows the published ratio beside the measured one. Scenes and "
                                      "spectra come from --shared.")
-    pub.add_argument("--shared", type=Path, default=REPO.parent / "shared",
-                     help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the repository)")
+    pub.add_argument("--shared", type=Path, default=default_shared(),
+                     help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the "
+                          "repository in a checkout; ./shared when the package is installed)")
     pub.add_argument("-o", "--outdir", type=Path, default=OUT / "published",
                      help="output folder (default out/published)")
     pub.add_argument("--only", nargs="+", default=None, metavar="SCENE/SPECTRUM",
@@ -370,8 +371,19 @@ def cmd_grid(args) -> int:
     return 0
 
 
+def default_shared() -> Path:
+    """Where ``published`` looks for the shared material when ``--shared`` is not given: ../shared
+    beside the checkout, or ``shared`` in the current folder for an installed package (whose
+    ../shared would be beside site-packages)."""
+    return REPO.parent / "shared" if data.in_checkout() else Path.cwd() / "shared"
+
+
 def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Path, str]]:
     """The (scene, spectrum) pairs of the published comparison, as paths under ``shared``."""
+    if not Path(shared).is_dir():
+        raise FileNotFoundError(2, "no such folder: the published comparison needs the shared "
+                                   "material (scenes/ and spectra/lspdd/); give its place with "
+                                   "--shared DIR", str(shared))
     jobs = []
     for scene, spec, *_ in PUBLISHED:
         if only and f"{scene}/{spec}" not in only:
@@ -380,7 +392,9 @@ def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Pa
         spectrum = spec if ":" in spec else str(shared / "spectra" / "lspdd" / f"{spec}.csv")
         for f in (path, Path(spectrum) if ":" not in spectrum else None):
             if f is not None and not f.is_file():
-                raise FileNotFoundError(2, "missing (the published comparison needs ../shared)", str(f))
+                raise FileNotFoundError(2, f"missing: the published comparison needs the shared "
+                                           f"material; is {shared} the right folder? (give it with "
+                                           "--shared DIR)", str(f))
         jobs.append((path, spectrum))
     if not jobs:
         known = ", ".join(f"{s}/{p}" for s, p, *_ in PUBLISHED)
