@@ -88,7 +88,8 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
 def _renderer(p: argparse.ArgumentParser) -> None:
     p.add_argument("--renderer", choices=("pbrt", "mitsuba"), default="pbrt",
                    help="pbrt (build/pbrt, a .pbrt scene) or mitsuba (Mitsuba 3, llvm_ad_spectral, a .xml "
-                        "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default)")
+                        "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default; "
+                        "needs no pbrt)")
 
 
 def _cluster(p: argparse.ArgumentParser) -> None:
@@ -196,10 +197,20 @@ PUBLISHED = (
 
 def _config(args) -> Config:
     resolution = args.resolution or args.resolution_scale or args.default_resolution
+    if getattr(args, "renderer", "pbrt") == "mitsuba":
+        # Mitsuba-only users need no pbrt (design §6.4): nothing looks for it.
+        if args.pbrt is not None:
+            raise ValueError("--pbrt is not used with --renderer mitsuba")
+        if args.reflectances is not None:
+            raise ValueError("--reflectances needs the pbrt renderer (the scene's materials come "
+                             "from pbrt); with --renderer mitsuba, leave it out")
+        pbrt = None
+    else:
+        pbrt = find_pbrt(args.pbrt)
     config = Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp,
                     truth_method=args.truth_method, truth_chunks=args.truth_chunks, resolution=resolution,
                     seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
-                    lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt),
+                    lo=args.range[0], hi=args.range[1], pbrt=pbrt,
                     reflectances=args.reflectances)
     check_config(config)
     if getattr(args, "workers", None) is not None and args.workers < 1:
@@ -229,10 +240,10 @@ def job_outputs(ev, spectrum, outdir: Path) -> None:
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
             bar=None, renderer: str = "pbrt"):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
-    spectrum, reflectances = job_inputs(scene, spectrum_spec, config)
     whole = spectrum_spec == WHOLE_SCENE
-    if renderer == "mitsuba" and (whole or reflectances is not None):
+    if renderer == "mitsuba" and (whole or config.reflectances is not None):
         raise ValueError(f"'{WHOLE_SCENE}' and --reflectances need the pbrt renderer")
+    spectrum, reflectances = job_inputs(scene, spectrum_spec, config)
 
     def say(msg: str) -> None:
         if bar is not None:
@@ -255,8 +266,15 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
             bar.set_postfix_str(f"{outdir.name}: optimizing the table, {min(step, total)}/{total} "
                                 f"evaluations, J {J:.4g}", refresh=True)
 
+    if bar is not None and table is None:  # the table's optimization starts by compiling
+        bar.set_postfix_str(f"{outdir.name}: optimizing the table: {progress.preparing_message()}",
+                            refresh=True)
     if renderer == "mitsuba":
-        from wavelength_pdf.evaluation import render_mitsuba
+        try:
+            from wavelength_pdf.evaluation import render_mitsuba
+        except ImportError as e:
+            raise ValueError(f"--renderer mitsuba needs Mitsuba 3: pip install "
+                             f"'wavelength-pdf[mitsuba]' ({e})") from None
         ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
                                      optimizer_progress=optimizing)
     else:
