@@ -9,7 +9,7 @@ and the report functions that is 2-3 s of CPU per process, a third of a short
 argument signature, the compiled executable itself (``jax.experimental.serialize_executable``)
 in ``<cache>/executables``; a later process loads it and calls it directly.
 
-The file name is a hash of the function's name, the argument signature (pytree structure,
+The file name is the function's name, :func:`environment_tag` and a hash of the function's name, the argument signature (pytree structure,
 shapes, dtypes, weak types, static arguments) and everything the compiled code depends on:
 the package's source files, the JAX and jaxlib versions, Python's version, ``XLA_FLAGS``
 and the CPU. The executable is the one a plain ``jax.jit`` call would run, so results are
@@ -52,7 +52,7 @@ from typing import Any, Callable
 import jax
 
 _dir: Path | None = None
-_env_key: str | None = None
+_env_keys: dict[bool, str] = {}  # environment_key() by float64 mode
 
 #: What a compilation is expected to take before this process has timed one (seconds; the
 #: search's objective with its gradient takes 2-5 s on one core).
@@ -217,10 +217,12 @@ def _cpu_key() -> str:
     return platform.processor() or platform.machine()
 
 
-def environment_key() -> str:
-    """Hash of everything besides the arguments that the compiled code depends on."""
-    global _env_key
-    if _env_key is None:
+def environment_key(x64: bool | None = None) -> str:
+    """Hash of everything besides the arguments that the compiled code depends on; ``x64``:
+    for JAX's float64 mode on or off (default: as it is set now)."""
+    if x64 is None:
+        x64 = bool(jax.config.jax_enable_x64)
+    if x64 not in _env_keys:
         import jaxlib
 
         h = hashlib.sha256()
@@ -230,10 +232,17 @@ def environment_key() -> str:
             h.update(f.read_bytes())
         for part in (jax.__version__, getattr(jaxlib, "__version__", ""), sys.version,
                      platform.machine(), os.environ.get("XLA_FLAGS", ""), _cpu_key(),
-                     str(jax.config.jax_enable_x64)):
+                     str(x64)):
             h.update(b"\0" + str(part).encode())
-        _env_key = h.hexdigest()
-    return _env_key
+        _env_keys[x64] = h.hexdigest()
+    return _env_keys[x64]
+
+
+def environment_tag(x64: bool | None = None) -> str:
+    """The first 8 hex digits of :func:`environment_key`, written into every executable's file
+    name, so that ``wavelength_pdf.compile_cache`` can tell whether the cache holds code for
+    this installation without loading any (the optimizer runs with ``x64`` on)."""
+    return environment_key(x64)[:8]
 
 
 def _leaf_signature(x: Any):
@@ -311,8 +320,9 @@ class DiskJit:
         return out
 
     def _path(self, sig) -> Path:
-        key = hashlib.sha256(repr((self.name, sig, environment_key())).encode()).hexdigest()[:40]
-        return _dir / f"{self.name}-{key}.pkl"
+        env = environment_key()
+        key = hashlib.sha256(repr((self.name, sig, env)).encode()).hexdigest()[:40]
+        return _dir / f"{self.name}-{env[:8]}-{key}.pkl"
 
     def _load(self, path: Path, args, name: str | None = None):
         from jax.experimental import serialize_executable

@@ -717,7 +717,8 @@ def enable_compilation_cache() -> str | None:
     """Keep compiled objectives on disk between runs (JAX's persistent compilation cache).
 
     Compiling the objective and its gradient takes 5-10 s per problem size; with the
-    cache a later run (another spectrum, another process) loads them in about a second.
+    cache a later run (another spectrum, another process) loads them in about a second
+    (``wavelength_pdf.compile_cache``: its place, size, ``warm`` and ``clear``).
     The objective's functions are also kept as whole executables (``aot``), which skips
     tracing and lowering them in a later process.
     The directory is ``$WAVELENGTH_PDF_JAX_CACHE`` if set (empty or ``off`` disables the
@@ -731,15 +732,12 @@ def enable_compilation_cache() -> str | None:
     global _cache_dir
     if _cache_dir is not None:
         return _cache_dir or None
-    env = os.environ.get("WAVELENGTH_PDF_JAX_CACHE")
-    if env is not None and env.strip().lower() in ("", "off", "0", "no"):
+    from wavelength_pdf import compile_cache
+
+    path = compile_cache.cache_dir()  # design §7: the folder, or None when turned off
+    if path is None:
         _cache_dir = ""
         return None
-    if env:
-        path = Path(env)
-    else:
-        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-        path = Path(base) / "wavelength-pdf" / "jax"
     try:
         path.mkdir(mode=0o700, parents=True, exist_ok=True)
         unsafe = aot.check_cache_folder(path)

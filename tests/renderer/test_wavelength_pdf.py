@@ -58,7 +58,7 @@ def scene(tmp_path_factory) -> Path:
     """The Cornell box with the sobol sampler, the lamp's spectrum path made absolute."""
     text = SCENE.read_text()
     text, n_sampler = re.subn(r'Sampler\s+"independent"', 'Sampler "sobol"', text)
-    spd = '"../../spectra/tri-band-fluorescent.spd"'
+    spd = '"tri-band-fluorescent.spd"'  # beside the scene (a copy of spectra/'s)
     assert n_sampler == 1 and spd in text, "scenes/cornell-box/scene.pbrt changed: update this test"
     text = text.replace(spd, f'"{REPO / "spectra" / "tri-band-fluorescent.spd"}"')
     out = tmp_path_factory.mktemp("cornell") / "scene.pbrt"

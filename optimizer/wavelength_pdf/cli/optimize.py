@@ -149,7 +149,9 @@ def cmd_optimize(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub, names: list[str]) -> None:
-    o = sub.add_parser("optimize", formatter_class=Formatter,
+    from wavelength_pdf.cli.cache import help_text
+
+    o = sub.add_parser("optimize", formatter_class=Formatter, epilog=help_text(),
                        help="optimize the wavelength table of a spectrum",
                        description="Optimize four wavelength densities for SPECTRUM and "
                                    "write them as a table (design §2) with a comment header. "
