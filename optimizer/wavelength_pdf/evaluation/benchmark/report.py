@@ -253,11 +253,12 @@ def _ratio(rows, job, a: str, b: str, spp: int, measure: str = MAIN) -> float:
     return ra[measure] / rb[measure] if ra and rb and rb[measure] > 0 else float("nan")
 
 
-def _spread(values: Sequence[float]) -> str:
+def _spread(values: Sequence[float], digits: int = 2) -> str:
     v = [x for x in values if math.isfinite(x)]
     if not v:
         return "–"
-    return f"{np.median(v):.2f} ({min(v):.2f}-{max(v):.2f})" if len(v) > 1 else f"{v[0]:.2f}"
+    d = digits
+    return f"{np.median(v):.{d}f} ({min(v):.{d}f}-{max(v):.{d}f})" if len(v) > 1 else f"{v[0]:.{d}f}"
 
 
 def regimes(rows: Sequence[dict]) -> list[tuple[str, list[str]]]:
@@ -290,8 +291,8 @@ def summary_table(rows: Sequence[dict], spp: int, measure: str = MAIN) -> str:
                      f"{_spread([_ratio(rows, j, 'uniform', o, spp, measure) for j, o in zip(js, opt)])} | "
                      f"{_spread([_ratio(rows, j, 'visible', o, spp, measure) for j, o in zip(js, opt)])} | "
                      f"{_spread([_ratio(rows, j, G.BUILTIN, 'spd', spp, measure) for j in js])} | "
-                     f"{_spread([100 * _table(rows, j, spp)['share_removed_de2'] for j in js])} % | "
-                     f"{_spread(spd_share)} % | {pays} of {len(js)} |")
+                     f"{_spread([100 * _table(rows, j, spp)['share_removed_de2'] for j in js], 0)} % | "
+                     f"{_spread(spd_share, 0)} % | {pays} of {len(js)} |")
     return head + "\n".join(lines) + "\n"
 
 
