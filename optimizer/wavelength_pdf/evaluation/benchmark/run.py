@@ -13,7 +13,7 @@ idempotent task whose finished image is reused):
   against it; chunks 0 + 2 and 1 + 3 are its two halves (its own noise, :mod:`.measures`).
 
 The baseline tables are written in this process (milliseconds each); the optimized tables
-are tasks that their renders wait for. Scoring reads the finished images into
+are tasks on the cluster, all finished before the first render is submitted. Scoring reads the finished images into
 ``OUT/jobs/.../scores.json`` (cached by the renders' keys).
 """
 from __future__ import annotations
@@ -213,19 +213,23 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
             f"{cost / 3600 / max(threads, 1):.2f} h wall on {threads} render threads"
             + (f"; {len(optimize)} table(s) to optimize first (not in the estimate)" if optimize else ""))
         made = {path: client.submit(_table_task, sp, path, refl, pure=False) for path, (sp, refl) in optimize.items()}
+        if made:
+            # The tables first, all of them: renders that waited on a table's future sat behind
+            # hundreds of others on a busy cluster (seen: seven tables never started in an hour).
+            with progress.bar(total=len(made), desc="tables", file=sys.stderr, unit="table") as bar:
+                for f in as_completed(list(made.values())):
+                    f.result()
+                    bar.update(1)
         futures = []
         # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),
         # cheap renders first within a job.
         order = {id(p): (priority(p.job), i) for i, p in enumerate(plans)}
         for p, r in sorted(todo, key=lambda pr: (order[id(pr[0])], pr[1].spp * _repeats(pr[1]))):
-            deps = [made[t] for t in _tables_of(r) if t in made]
-            futures.append(client.submit(cluster.render_task, r, nthreads, slots, *deps, pure=False))
+            futures.append(client.submit(cluster.render_task, r, nthreads, slots, pure=False))
         with progress.bar(total=len(futures), desc="benchmark", file=sys.stderr, unit="render") as bar:
             for f in as_completed(futures):
                 f.result()
                 bar.update(1)
-        for t, f in made.items():
-            f.result()
 
 
 def priority(job: G.Job) -> int:
