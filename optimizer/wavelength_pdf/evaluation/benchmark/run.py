@@ -13,8 +13,8 @@ idempotent task whose finished image is reused):
   against it; chunks 0 + 2 and 1 + 3 are its two halves (its own noise, :mod:`.measures`).
 
 The baseline tables are written in this process (milliseconds each); the optimized tables
-are tasks on the cluster, all finished before the first render is submitted. Scoring reads the finished images into
-``OUT/jobs/.../scores.json`` (cached by the renders' keys).
+are tasks on the cluster, all finished before the first render is submitted. Scoring reads
+the finished images into ``OUT/jobs/.../scores.json`` (cached by the renders' keys).
 """
 from __future__ import annotations
 
