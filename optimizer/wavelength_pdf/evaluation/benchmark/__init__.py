@@ -36,7 +36,9 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     from wavelength_pdf.evaluation.benchmark import timing as T
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
-    out = Path(out)
+    # Absolute: the renders' cache keys hold the tables' paths, which must not depend on how
+    # the folder was spelled (-o out/benchmark and -o /abs/out/benchmark are the same grid).
+    out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     for s in spec.skipped:
         say(f"benchmark: skipped {s}")
