@@ -146,12 +146,6 @@ def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
             proc.terminate()
         except (OSError, ValueError):
             pass
-    # The queue's feeder thread may be blocked writing jobs to workers that are gone; joined at
-    # exit, it held an interrupted batch for minutes on a busy machine. Not joining it is the
-    # queue's documented way out (the jobs it still holds are cancelled anyway).
-    call_queue = getattr(pool, "_call_queue", None)
-    if call_queue is not None:
-        call_queue.cancel_join_thread()
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in procs:
         try:

@@ -48,6 +48,12 @@ def _running(pid: int) -> bool:
     return state not in ("Z", "X")
 
 
+def _default_sigint() -> None:
+    """In the child: SIGINT's default action. A suite started in the background (`cmd &`)
+    hands its children SIGINT ignored, which Python then keeps: Ctrl-C would do nothing."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start_batch(tmp_path: Path) -> tuple[subprocess.Popen, list[int]]:
     folder = tmp_path / "in"
     folder.mkdir()
@@ -57,7 +63,7 @@ def _start_batch(tmp_path: Path) -> tuple[subprocess.Popen, list[int]]:
                PYTHONPATH=os.pathsep.join([str(REPO / "optimizer"), os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.Popen([sys.executable, "-m", "wavelength_pdf", "batch", str(folder), "-o",
                              str(tmp_path / "out"), "--jobs", "2", "--quiet"], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, preexec_fn=_default_sigint)
     deadline = time.monotonic() + 120
     workers: list[int] = []
     while time.monotonic() < deadline and proc.poll() is None:

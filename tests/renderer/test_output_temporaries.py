@@ -28,6 +28,14 @@ Shape "sphere"
 """
 
 
+def default_signals() -> None:
+    """In the child: the default action for the signals the tests send. A suite started in the
+    background (`cmd &`, nohup) hands its children SIGINT and SIGHUP ignored, and a process
+    rightly keeps an inherited "ignore"; the tests are about a process that gets them."""
+    for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 def leftovers(out: Path) -> list[str]:
     return sorted(p.name for p in out.parent.iterdir() if p.name.startswith(out.name + "."))
 
@@ -36,7 +44,7 @@ def stop_while_writing(pbrt: Path, scene: Path, out: Path, sig: int) -> tuple[in
     """Runs pbrt and sends ``sig`` as soon as a temporary of ``out`` exists; returns the exit
     status and the temporary's name (empty when pbrt finished before one was seen)."""
     proc = subprocess.Popen([str(pbrt), "--quiet", "--nthreads", "2", "--outfile", str(out),
-                             str(scene)], stderr=subprocess.PIPE)
+                             str(scene)], stderr=subprocess.PIPE, preexec_fn=default_signals)
     seen: list[str] = []
     deadline = time.monotonic() + 300
     while proc.poll() is None and time.monotonic() < deadline:
