@@ -163,17 +163,27 @@ def plot_errors(rows: Sequence[dict], jobs: Sequence[str], path: Path, measure: 
     cols = min(4, n)
     fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3.2 * cols, 2.6 * ((n + cols - 1) // cols)),
                              squeeze=False)
-    styles = {"optimized": dict(color="k", lw=2), G.FLOOR: dict(color="0.5", ls=":", lw=2)}
+    order = [*G.SIMPLE, "start", "reference", G.SCENE_COLOURS, "optimized", G.FLOOR]
+    # One colour per row in every panel (a panel without a row must not shift the others').
+    styles = {row: dict(color=f"C{i}") for i, row in enumerate(order)}
+    styles["optimized"] = dict(color="k", lw=2)
+    styles[G.FLOOR] = dict(color="0.5", ls=":", lw=2)
+    spps = sorted({r["spp"] for r in rows if r["job"] in jobs})
     for ax, job in zip(axes.ravel(), jobs):
-        for row in [*G.SIMPLE, "start", "reference", G.SCENE_COLOURS, "optimized", G.FLOOR]:
+        for row in order:
             pts = sorted((r["spp"], r[measure]) for r in rows if r["job"] == job and r["row"] == row)
             if pts:
-                ax.loglog(*zip(*pts), marker="o", ms=3, label=row, **styles.get(row, {}))
+                ax.loglog(*zip(*pts), marker="o", ms=3, label=row, **styles[row])
         ax.set_title(job, fontsize=7)
+        ax.set_xticks(spps, [str(n) for n in spps])
+        ax.minorticks_off()
         ax.tick_params(labelsize=6)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    axes[0, 0].legend(fontsize=5)
+    from matplotlib.lines import Line2D
+
+    present = [row for row in order if any(r["row"] == row and r["job"] in jobs for r in rows)]
+    axes[0, 0].legend([Line2D([], [], marker="o", ms=3, **styles[row]) for row in present], present, fontsize=5)
     fig.supxlabel("samples per pixel", fontsize=8)
     fig.supylabel(f"{measure} (seed pairs)", fontsize=8)
     fig.tight_layout()
