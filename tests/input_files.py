@@ -74,3 +74,11 @@ def link_to_dev_zero(folder: Path, name: str) -> Path:
     path = folder / name
     path.symlink_to("/dev/zero")
     return path
+
+
+def sphere_scene(resolution: int, spp: int) -> str:
+    """A pbrt-v4 scene of one sphere under an infinite light, ``resolution`` pixels square at
+    ``spp``: as slow to render (or, large, to write) as a test needs."""
+    return (f'Film "rgb" "integer xresolution" [ {resolution} ] "integer yresolution" [ {resolution} ]\n'
+            f'Sampler "independent" "integer pixelsamples" [ {spp} ]\n'
+            'WorldBegin\nLightSource "infinite"\nShape "sphere"\n')

@@ -17,15 +17,10 @@ import time
 from pathlib import Path
 
 import pytest
+from input_files import sphere_scene
 
 #: 2000 x 2000 pixels at 1 spp: a few seconds to render, ~0.5 s to write as PNG.
-SCENE = """\
-Film "rgb" "integer xresolution" [ 2000 ] "integer yresolution" [ 2000 ]
-Sampler "independent" "integer pixelsamples" [ 1 ]
-WorldBegin
-LightSource "infinite"
-Shape "sphere"
-"""
+SCENE = sphere_scene(2000, 1)
 
 
 def default_signals() -> None:

@@ -12,16 +12,11 @@ import time
 from pathlib import Path
 
 import pytest
+from input_files import sphere_scene
 
 #: A scene that takes well over the time the checks below allow, were it rendered: an
 #: error that comes "before rendering" must come in far less time than this scene takes.
-SLOW_SCENE = """\
-Film "rgb" "integer xresolution" [ 512 ] "integer yresolution" [ 512 ]
-Sampler "independent" "integer pixelsamples" [ 4096 ]
-WorldBegin
-LightSource "infinite"
-Shape "sphere"
-"""
+SLOW_SCENE = sphere_scene(512, 4096)
 
 
 def run(pbrt, *args: str) -> subprocess.CompletedProcess:
