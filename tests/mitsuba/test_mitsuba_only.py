@@ -1,4 +1,4 @@
-"""Mitsuba-only users (issue 33, point 4): the Mitsuba commands need no pbrt; an RGB variant and
+"""Mitsuba-only users (design §8.3): the Mitsuba commands need no pbrt; an RGB variant and
 a forgotten register() get errors that say so; an XML scene using the plugin renders from the
 command line (``wavelength-pdf mitsuba``, ``python -m wavelength_pdf.mitsuba``); the scalar
 variants' cost is said once, with the alternative."""

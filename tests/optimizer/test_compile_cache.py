@@ -1,4 +1,4 @@
-"""The compile cache seen by a user (issue 33, point 3; design §7): the first run's progress
+"""The compile cache seen by a user (design §7): the first run's progress
 line says it compiles once and how long that takes, with no estimate of the time left until
 evaluations run; the cache's place and size are in --help; ``cache info|clear|warm``."""
 from __future__ import annotations

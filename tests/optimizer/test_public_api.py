@@ -1,4 +1,4 @@
-"""The public API (issue 33, point 6): what ``wavelength_pdf`` exports is typed for a type
+"""The public API (the names in ``__all__``, CHANGELOG.md): what ``wavelength_pdf`` exports is typed for a type
 checker (mypy sees the real signatures, not ``Any``), documented by ``help()``, and versioned
 as CHANGELOG.md says."""
 from __future__ import annotations
