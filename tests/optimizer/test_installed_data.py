@@ -1,7 +1,7 @@
 """The shipped Cornell box works once installed (docs/data.md: the folder ships on its own in
-the wheel): its folder is self-contained, so the copy a wheel carries (``wavelength_pdf/_data/cornell_box``) renders the
-checkout's pixels and gives the optimizer the same lamp; ``published`` names ``--shared`` when
-the shared material is not where it looked."""
+the wheel): its folder is self-contained, so the copy a wheel carries
+(``wavelength_pdf/_data/cornell_box``) renders the checkout's pixels and gives the optimizer the
+same lamp; ``published`` names ``--shared`` when the shared material is not where it looked."""
 from __future__ import annotations
 
 import re
