@@ -206,7 +206,7 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
         return
     with cluster.connect(workers, scheduler) as client:
         slots = cluster.slots_by_host(client)
-        cost = _estimate(client, plans, [r for _, r in todo], nthreads, slots)
+        cost = _estimate(client, plans, [r for _, r in todo], nthreads, slots, say)
         threads = sum(s * (nthreads or cluster.render_threads(cluster.cores(), s)) for s in slots.values())
         say(f"benchmark: {len(todo)} renders to do of {sum(len(p.renders()) for p in plans)} "
             f"({len(plans)} jobs); estimated CPU time {cost / 3600:.2f} h, about "
@@ -267,7 +267,8 @@ def _repeats(r: RenderJob) -> int:
     return int(a[a.index("--wavelength-repeats") + 1]) if "--wavelength-repeats" in a else 1
 
 
-def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthreads, slots) -> float:
+def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthreads, slots,
+              say: Callable[[str], None]) -> float:
     """CPU seconds of ``todo`` from two short renders of one copy of each scene (on the
     cluster): the copies of a scene differ only in their lamp and pixel sampler, which change
     the cost little, and probing all of them took longer than some sweeps."""
@@ -292,9 +293,8 @@ def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthre
     for r in todo:
         key = plan_of[r.scene].job.scene.key
         by_scene[key] = by_scene.get(key, 0.0) + costs[key].cpu_seconds(r.spp * _repeats(r))
-    print("benchmark: estimated CPU minutes by scene: "
-          + ", ".join(f"{k} {v / 60:.0f}" for k, v in sorted(by_scene.items(), key=lambda kv: -kv[1])),
-          file=sys.stderr)
+    say("benchmark: estimated CPU minutes by scene: "
+        + ", ".join(f"{k} {v / 60:.0f}" for k, v in sorted(by_scene.items(), key=lambda kv: -kv[1])))
     return sum(by_scene.values())
 
 
