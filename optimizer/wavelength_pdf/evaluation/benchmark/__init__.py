@@ -68,7 +68,8 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     elif (out / "timing.csv").is_file():
         et = report.equal_time(rows, T.read_timing(out / "timing.csv"), timing_spp)
     spp = report_spp if any(r["spp"] == report_spp for r in rows) else max(r["spp"] for r in rows)
-    scene_jobs = [j for j in report.jobs_of(rows, "scenes", "sobol") if "/2482/" in j or "/own/" in j] or \
+    headline = (f"/{G.HEADLINE_LAMP}/", "/own/")
+    scene_jobs = [j for j in report.jobs_of(rows, "scenes", "sobol") if any(h in j for h in headline)] or \
         report.jobs_of(rows, None, "sobol")[:12]
     report.plot_errors(rows, scene_jobs, out / IMAGES[0])
     lamp_jobs = report.jobs_of(rows, "lamps")

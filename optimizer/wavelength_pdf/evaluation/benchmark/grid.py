@@ -153,9 +153,10 @@ SCENE_SWEEP_LAMPS = ("2482", "cie-FL2", "2641", "2536", "2469", "cie-D65")
 #: The scene sweep's sample counts; the independent pixel sampler's jobs stop at the second
 #: (at 256 spp they would take half the grid's CPU time and add the least).
 SPP = (16, 64, 256)
-#: The lamp under which each scene's table for its own material colours is optimized (one
-#: optimization per scene; scenes with their own lamps get one too).
-SCENE_COLOURS_LAMP = "2482"
+#: The headline lamp (the compact fluorescent 2482): each scene's table for its own material
+#: colours is optimized under it (scenes with their own lamps get one too), its jobs render
+#: first, are timed, and are plotted.
+HEADLINE_LAMP = "2482"
 #: The lamp sweep's two cheap scenes.
 LAMP_SWEEP_SCENES = ("colorchecker", "cornell-box")
 
@@ -218,7 +219,7 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
         lamps = [None] if s.own_lamps else [LAMPS[k] for k in SCENE_SWEEP_LAMPS]
         for lamp in lamps:
             for ps in PIXEL_SAMPLERS:
-                colours = ps == "sobol" and (lamp is None or lamp.key == SCENE_COLOURS_LAMP)
+                colours = ps == "sobol" and (lamp is None or lamp.key == HEADLINE_LAMP)
                 add(g, Job(s, lamp, ps, sweep="scenes", spp=SPP if ps == "sobol" else SPP[:2],
                            rows=TABLE_ROWS + ((SCENE_COLOURS,) if colours else ())))
     return g

@@ -237,7 +237,7 @@ def priority(job: G.Job) -> int:
     jobs under the compact fluorescent lamp or the scene's own lamps, the lamp sweep's
     ColorChecker, the same scene jobs with independent samples, the rest of the scene sweep,
     the rest of the lamp sweep."""
-    headline = job.lamp is None or job.lamp.key == G.SCENE_COLOURS_LAMP
+    headline = job.lamp is None or job.lamp.key == G.HEADLINE_LAMP
     scenes = "scenes" in job.sweep.split("+")
     if scenes and headline:
         return 0 if job.pixel_sampler == "sobol" else 2
