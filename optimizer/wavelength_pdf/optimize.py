@@ -21,7 +21,7 @@ import importlib.util
 import inspect
 import math
 import time
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -32,6 +32,10 @@ from .result import Result
 from .solvers import DEFAULT_SOLVER, SOLVERS, SolverResult
 from .table import Table
 from .threads import single_threaded_blas
+
+if TYPE_CHECKING:  # annotations only: no import cost at run time
+    from .reflectances import ReflectanceSet
+    from .spectra import Spectrum
 
 __all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget", "starting_table",
            "DEFAULT_GRID", "SOLVERS"]
@@ -82,7 +86,7 @@ def _auto_grid(spectrum) -> np.ndarray:
 
 @float64
 def optimize_spectrum(
-    spectrum,
+    spectrum: Spectrum,
     *,
     grid: np.ndarray | str = "auto",
     solver: str = DEFAULT_SOLVER,
@@ -90,7 +94,7 @@ def optimize_spectrum(
     progress: Callable[[int, float], None] | None = None,
     max_seconds: float | None = None,
     solver_options: dict | None = None,
-    reflectances=None,
+    reflectances: ReflectanceSet | None = None,
 ) -> Result:
     """Find four wavelength densities on ``grid`` that minimize J for ``spectrum``.
 
@@ -232,7 +236,7 @@ def _source(spectrum, reflectances) -> str:
 
 
 @float64
-def evaluate_table(spectrum, table: Table, reflectances=None) -> Result:
+def evaluate_table(spectrum: Spectrum, table: Table, reflectances: ReflectanceSet | None = None) -> Result:
     """Score any table (e.g. a reference table) for ``spectrum`` with the project's
     evaluator: the same record as :func:`optimize_spectrum`, judged by the same rule
     against the equal-mass initialization on the table's grid (``solver`` is ''); with

@@ -40,6 +40,7 @@ from typing import Iterator
 
 import numpy as np
 
+from wavelength_pdf.files import InputFileError, read_regular_file
 from wavelength_pdf.pbrt_syntax import Param, Statement, Token, split_params, statements, tokenize  # noqa: F401,E501
 from wavelength_pdf.spectra import (
     Spectrum,
@@ -216,14 +217,17 @@ def _read_spd_any(file: Path) -> Spectrum:
 # --------------------------------------------------------------------------------------
 
 def _read_scene_text(path: Path, where: str | None) -> str:
+    """A scene file's text: a regular file (as the renderer reads it, design §5.5; no size
+    cap), so that a device or FIFO named as a scene or an Include fails at once."""
     try:
-        return path.read_text(encoding="utf-8-sig", errors="replace")
-    except FileNotFoundError:
-        raise SpectrumError(f"{where or path}: no such file{f' ({path})' if where else ''}") from None
-    except IsADirectoryError:
-        raise SpectrumError(f"{where or path}: {path} is a directory, not a scene") from None
-    except OSError as e:
-        raise SpectrumError(f"{where or path}: cannot read {path} ({e.strerror})") from None
+        data = read_regular_file(path, "scene", max_bytes=None)
+    except InputFileError as e:
+        if e.reason == "no such file":
+            raise SpectrumError(f"{where or path}: no such file{f' ({path})' if where else ''}") from None
+        if e.reason.startswith("is a directory"):
+            raise SpectrumError(f"{where or path}: {path} is a directory, not a scene") from None
+        raise SpectrumError(f"{where or path}: {path}: {e.reason}") from None
+    return data.decode("utf-8-sig", errors="replace")
 
 
 def scan_scene(path: str | Path) -> list[Emitter]:

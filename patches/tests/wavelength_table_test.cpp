@@ -7,6 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -736,8 +741,168 @@ TEST(WavelengthTable, MakeTableRejectsWithTheName) {
     expect({380, 390}, {{{1, 1}, {1, 1}, {1}, {1, 1}}}, "pdf2 has 1 values, the grid has 2");
     expect({390, 380}, {{{1, 1}, {1, 1}, {1, 1}, {1, 1}}},
            "grid is not strictly increasing (390 then 380 nm)");
-    expect({380, 390}, {{{1e308, 1e308}, {1, 1}, {1, 1}, {1, 1}}},
-           "pdf0 integrates to infinity (values too large)");
+    expect({-1e308, 1e308}, {{{1, 1}, {1, 1}, {1, 1}, {1, 1}}},
+           "pdf0 integrates to infinity (the grid is too wide)");
+    expect({0, 5e-324}, {{{1, 1}, {1, 1}, {1, 1}, {1, 1}}},
+           "pdf0 cannot be normalized exactly (the grid is too narrow)");
+    // Values near the largest double are scaled by a power of two, not refused.
+    const wt::Table big = wt::MakeTable({380, 390}, {{{1e308, 1e308}, {1, 1}, {1, 1}, {1, 1}}}, "big");
+    EXPECT_DOUBLE_EQ(big.pdf[0][0], 0.1);
+}
+
+// ---------------------------------------------------------------------------------------
+// The edge-case tables every reader reads alike (tests/data/tables/edge/expected.csv, the
+// same files and expectations as the Python reader's and the renderer's tests; design §2).
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+struct EdgeCase {
+    std::string file;
+    int nodes = 0;  // > 0: accepted with this many nodes
+    int line = 0;   // else refused at this line
+    std::string reason;
+};
+
+std::vector<EdgeCase> EdgeCases() {
+    std::ifstream in(std::string(WT_EDGE_TABLES_DIR) + "/expected.csv");
+    std::vector<EdgeCase> out;
+    std::string line;
+    bool header = false;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#')
+            continue;
+        if (!header) {
+            header = true;  // file,nodes,line,reason
+            continue;
+        }
+        std::vector<std::string> f;
+        std::size_t start = 0;
+        for (int i = 0; i < 3; ++i) {
+            const std::size_t comma = line.find(',', start);
+            f.push_back(line.substr(start, comma - start));
+            start = comma + 1;
+        }
+        f.push_back(line.substr(start));  // the reason may hold commas
+        EdgeCase c;
+        c.file = f[0];
+        c.nodes = f[1].empty() ? 0 : std::stoi(f[1]);
+        c.line = f[2].empty() ? 0 : std::stoi(f[2]);
+        c.reason = f[3];
+        out.push_back(c);
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST(WavelengthTable, EdgeTablesAsEveryReaderReadsThem) {
+    const std::vector<EdgeCase> cases = EdgeCases();
+    ASSERT_GE(cases.size(), 20u) << "tests/data/tables/edge/expected.csv is missing or short";
+    for (const EdgeCase &c : cases) {
+        SCOPED_TRACE(c.file);
+        const std::string path = std::string(WT_EDGE_TABLES_DIR) + "/" + c.file;
+        if (c.nodes > 0) {
+            wt::Table t;
+            ASSERT_NO_THROW(t = wt::LoadTable(path));
+            EXPECT_EQ(t.grid.size(), std::size_t(c.nodes));
+            for (int k = 0; k < wt::kNumDensities; ++k) {
+                EXPECT_NEAR(IntegratePdf(t, k, t.grid.front(), t.grid.back()), 1.0, 1e-13) << k;
+                for (double p : t.pdf[k])
+                    EXPECT_TRUE(std::isfinite(p) && p >= 0) << p;
+            }
+            continue;
+        }
+        try {
+            wt::LoadTable(path);
+            ADD_FAILURE() << "accepted; expected line " << c.line << ": " << c.reason;
+        } catch (const wt::TableError &e) {
+            const std::string msg = e.what();
+            EXPECT_EQ(msg.rfind(path + ":" + std::to_string(c.line) + ": ", 0), 0u) << msg;
+            EXPECT_NE(msg.find(c.reason), std::string::npos) << msg;
+        }
+    }
+}
+
+TEST(WavelengthTable, SubnormalDensitiesAreRenormalizedExactly) {
+    // 5e-324 everywhere is a uniform density; summed in subnormal numbers its mass came out
+    // 16 % off and pbrt rendered too dark.
+    const wt::Table t = wt::LoadTable(std::string(WT_EDGE_TABLES_DIR) + "/denormal.csv");
+    const double span = t.grid.back() - t.grid.front();
+    for (int k = 0; k < wt::kNumDensities; ++k)
+        for (double p : t.pdf[k])
+            EXPECT_NEAR(p * span, 1.0, 1e-13);
+}
+
+#if defined(__SSE2__)
+// A renderer built with -ffast-math (or Dr.Jit's threads, where the Mitsuba plugin reads its
+// table) runs with the FPU flushing subnormal numbers to zero: the tables read the same.
+TEST(WavelengthTable, EdgeTablesReadTheSameWithSubnormalsFlushedToZero) {
+    const unsigned int saved = _mm_getcsr();
+    std::vector<wt::Table> plain, flushed;
+    std::vector<std::string> names;
+    for (const EdgeCase &c : EdgeCases())
+        if (c.nodes > 0) names.push_back(std::string(WT_EDGE_TABLES_DIR) + "/" + c.file);
+    for (const std::string &n : names)
+        plain.push_back(wt::LoadTable(n));
+    _mm_setcsr(saved | 0x8040);  // FTZ and DAZ
+    std::vector<std::string> errors;
+    for (const std::string &n : names) {
+        try {
+            flushed.push_back(wt::LoadTable(n));
+        } catch (const wt::TableError &e) {
+            errors.push_back(e.what());
+        }
+    }
+    _mm_setcsr(saved);
+    ASSERT_TRUE(errors.empty()) << errors.front();
+    for (std::size_t j = 0; j < names.size(); ++j) {
+        SCOPED_TRACE(names[j]);
+        EXPECT_EQ(flushed[j].grid, plain[j].grid);
+        for (int k = 0; k < wt::kNumDensities; ++k)
+            for (std::size_t i = 0; i < plain[j].grid.size(); ++i) {
+                // Equal, except values below the normal doubles that FTZ flushes to 0.
+                const double a = plain[j].pdf[k][i], b = flushed[j].pdf[k][i];
+                EXPECT_TRUE(a == b || (b == 0 && a < 2.3e-308)) << k << " " << i << ": " << a << " " << b;
+            }
+    }
+}
+#endif
+
+// ---------------------------------------------------------------------------------------
+// What is not a table file: regular files of at most 64 MiB only (design §2.3).
+// ---------------------------------------------------------------------------------------
+
+TEST(WavelengthTable, DevicesAndFifosAreRefusedWithoutReading) {
+    const std::string fifo = TempPath("fifo.csv");
+    std::filesystem::remove(fifo);
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    const std::string reason = "not a regular file (a device, FIFO or socket), not a table file";
+    for (const std::string &path : {fifo, std::string("/dev/zero")}) {
+        try {
+            wt::LoadTable(path);  // used to block on the FIFO, or read /dev/zero for ever
+            ADD_FAILURE() << path << " was accepted";
+        } catch (const wt::TableError &e) {
+            EXPECT_EQ(std::string(e.what()), path + ": " + reason);
+        }
+    }
+    std::filesystem::remove(fifo);
+}
+
+TEST(WavelengthTable, TableLargerThan64MiBIsRefused) {
+    // A valid table padded past the cap with comment lines.
+    std::string text = "lambda_nm,pdf0,pdf1,pdf2,pdf3\n380,1,1,1,1\n780,1,1,1,1\n";
+    const std::string comment = "#" + std::string(1023, 'x') + "\n";
+    while (text.size() <= wt::kMaxTableBytes)
+        text += comment;
+    const std::string path = WriteFile("big.csv", text);
+    try {
+        wt::LoadTable(path);
+        ADD_FAILURE() << "a table of " << text.size() << " bytes was accepted";
+    } catch (const wt::TableError &e) {
+        EXPECT_EQ(std::string(e.what()), path + ": larger than 64 MiB, not a table file");
+    }
+    std::filesystem::remove(path);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -49,7 +49,7 @@ def test_film_resolution_and_file_paths(tmp_path: Path) -> None:
     assert '"integer xresolution" [ 32 ]' in text and '"integer yresolution" [ 24 ]' in text
     assert f'"{(src / "models" / "m.ply").resolve()}"' in text
     assert '"float scale" [ 3 ]' in text and 'Shape "sphere" "float radius" [ 2 ]  # untouched' in text
-    assert '"rgb L"' not in text and '"spectrum L" [ 380 ' in text
+    assert '"rgb L"' not in text and '"spectrum L" [ 379.999 0 380 ' in text
 
 
 def test_resolution_added_when_the_film_has_none(tmp_path: Path) -> None:
@@ -91,3 +91,39 @@ def test_maxdepth_replaced_or_added(tmp_path: Path) -> None:
     # None keeps the scene's own
     scene.write_text('Integrator "path" "integer maxdepth" [ 17 ]\nWorldBegin\n')
     assert '"integer maxdepth" [ 17 ]' in edit_scene(scene, None, tmp_path / "c.pbrt").read_text()
+
+
+def test_a_cut_spectrum_emits_nothing_outside_the_range(tmp_path: Path) -> None:
+    """pbrt-v4 extends a spectrum's end values over its whole range; a cut one ends in zeros."""
+    flat = Spectrum("flat", "test", np.array([300.0, 900.0]), np.array([2.0, 2.0]))
+    numbers = [float(v) for v in inline_spectrum(flat, 380, 780).strip("[] ").split()]
+    lam, val = numbers[0::2], numbers[1::2]
+    assert (lam[0], val[0]) == (380 - 1e-3, 0.0) and (lam[-1], val[-1]) == (780 + 1e-3, 0.0)
+    assert val[1:-1] == [2.0] * (len(val) - 2)
+
+
+def test_cut_emitters_keeps_their_shape_inside_the_range(tmp_path: Path, pbrt) -> None:
+    (tmp_path / "lamp.spd").write_text("300 1\n600 4\n900 1\n")
+    scene = tmp_path / "s.pbrt"
+    scene.write_text('Film "rgb" "integer xresolution" [ 4 ] "integer yresolution" [ 4 ]\nWorldBegin\n'
+                     'LightSource "point" "spectrum I" [ 400 1 700 1 ] "float scale" [ 2 ]\n'
+                     'AttributeBegin\n  AreaLightSource "diffuse" "spectrum L" "lamp.spd"\n'
+                     '  Shape "sphere" "float radius" [ 1 ]\nAttributeEnd\n')
+    out = edit_scene(scene, None, tmp_path / "c" / "c.pbrt", cut_emitters=True)
+    import subprocess
+
+    spd = tmp_path / "e.spd"
+    subprocess.run([str(pbrt), "--quiet", "--emission-spectrum", str(spd), str(out)], check=True)
+    lam, val = np.loadtxt(spd, comments="#").T
+    assert np.all(val[(lam < 380 - 1e-3) | (lam > 780 + 1e-3)] == 0)
+    inside = (lam >= 380) & (lam <= 780)
+    assert np.all(val[inside] > 0)
+    # Inside the range the cut emitters emit as before.
+    whole = tmp_path / "w.spd"
+    subprocess.run([str(pbrt), "--quiet", "--emission-spectrum", str(whole), str(scene)], check=True)
+    lw, vw = np.loadtxt(whole, comments="#").T
+    grid = np.linspace(381, 779, 50)
+    np.testing.assert_allclose(np.interp(grid, lam, val), np.interp(grid, lw, vw), rtol=1e-5)
+    scene.write_text('WorldBegin\nLightSource "point" "rgb I" [ 1 1 1 ]\n')
+    with pytest.raises(SpectrumError, match="cannot be cut"):
+        edit_scene(scene, None, tmp_path / "c" / "d.pbrt", cut_emitters=True)

@@ -5,6 +5,7 @@ loading included, the same for every sampler) is what the error-against-time plo
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -105,8 +106,28 @@ def file_digest(*paths: Path, extra: str = "") -> str:
     """A short content hash of files and a string (cache keys)."""
     h = hashlib.sha256(extra.encode())
     for p in paths:
-        h.update(Path(p).read_bytes())
+        h.update(_content_hash(Path(p)))
     return h.hexdigest()[:16]
+
+
+#: Content hashes of large files (the renderer) are cached by (path, inode, size, times): a
+#: grid asks for the renderer's hash once per render, and reading a binary of tens of MB ten
+#: thousand times took longer than the renders. Small files (scenes, tables) are hashed every
+#: time, since one rewritten within the file system's timestamp tick would keep a stale hash.
+_CACHED_FROM = 1 << 20
+
+
+def _content_hash(path: Path) -> bytes:
+    st = path.stat()
+    if st.st_size < _CACHED_FROM:
+        return hashlib.sha256(path.read_bytes()).digest()
+    return _large_file_hash(str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+
+
+@functools.lru_cache(maxsize=16)
+def _large_file_hash(path: str, *identity: int) -> bytes:
+    """The hash of a large file, cached by its path and ``identity`` (inode, size, times)."""
+    return hashlib.sha256(Path(path).read_bytes()).digest()
 
 
 def _run(cmd: list[str], on_percent: Callable[[int], None] | None) -> tuple[int, str]:

@@ -33,10 +33,14 @@ _WITH_PARAMS["Texture"] = 3
 
 #: Values below this fraction of the peak are written as 0 into a scene (design §3.3).
 SCENE_FLOOR = 1e-30
+#: pbrt-v4 extends a spectrum beyond its first and last samples with their values; a cut
+#: spectrum ends with a zero this far outside [lo, hi], nm, so that it emits nothing there.
+CUT_STEP = 1e-3
 
 
 def inline_spectrum(spectrum: Spectrum, lo: float, hi: float) -> str:
-    """``[ lambda value ... ]`` of a spectrum cut to [lo, hi] (exact at lo and hi)."""
+    """``[ lambda value ... ]`` of a spectrum cut to [lo, hi] (exact at lo and hi, and 0 from
+    ``CUT_STEP`` outside them on: pbrt-v4 would extend the end values over its whole range)."""
     lam = spectrum.wavelengths
     inside = (lam > lo) & (lam < hi)
     grid = np.concatenate([[lo], lam[inside], [hi]])
@@ -46,6 +50,10 @@ def inline_spectrum(spectrum: Spectrum, lo: float, hi: float) -> str:
     # The renderer reads single precision: values below 1e-30 of the peak (a Gaussian line's
     # far tails) would underflow there, and change nothing (design §3.3).
     values = np.where(values < values.max() * SCENE_FLOOR, 0.0, values)
+    if values[0] > 0:
+        grid, values = np.concatenate([[lo - CUT_STEP], grid]), np.concatenate([[0.0], values])
+    if values[-1] > 0:
+        grid, values = np.concatenate([grid, [hi + CUT_STEP]]), np.concatenate([values, [0.0]])
     return "[ " + " ".join(f"{w:.10g} {v:.10g}" for w, v in zip(grid, values)) + " ]"
 
 
@@ -63,7 +71,8 @@ def _span(tokens: list[Token]) -> tuple[int, int]:
 def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
                lo: float = 380.0, hi: float = 780.0,
                resolution: tuple[int, int] | float | None = None,
-               maxdepth: int | None = None, pixel_sampler: str | None = None) -> Path:
+               maxdepth: int | None = None, pixel_sampler: str | None = None,
+               cut_emitters: bool = False) -> Path:
     """Write a copy of ``scene`` at ``out`` lit by ``spectrum`` (None: keep the emitters).
 
     ``resolution`` is the film's new (width, height), or a factor applied to the scene's own
@@ -71,7 +80,10 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
     ``maxdepth`` replaces the integrator's "maxdepth" (added when it gives none); None keeps it.
     ``pixel_sampler`` (e.g. "independent") replaces the scene's ``Sampler`` statement by one of
     that type with the same "pixelsamples" (added before ``WorldBegin`` when there is none);
-    None keeps it.
+    None keeps it. ``cut_emitters`` (with ``spectrum`` None) cuts every emitter's inline
+    spectrum to [lo, hi] as :func:`inline_spectrum` does, so that every sampler of the
+    comparison integrates the same light; an emitter given otherwise (rgb, blackbody, a file)
+    is an error then.
 
     Included files are inlined into the copy's folder as edited copies of their own, so that
     emitters and file names inside them are handled the same way.
@@ -84,7 +96,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
     scene, out = Path(scene).resolve(), Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, maxdepth, depth=0,
-                      pixel_sampler=pixel_sampler)
+                      pixel_sampler=pixel_sampler, cut=cut_emitters)
     tmp = out.with_suffix(out.suffix + ".tmp")
     tmp.write_text(body)
     tmp.replace(out)
@@ -93,7 +105,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
 
 def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, hi: float,
                resolution: tuple[int, int] | float | None, maxdepth: int | None, depth: int,
-               pixel_sampler: str | None = None) -> str:
+               pixel_sampler: str | None = None, cut: bool = False) -> str:
     if depth > 32:
         raise SpectrumError(f"{path}: Include nesting deeper than 32 (a cycle?)")
     try:
@@ -120,7 +132,7 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
             child = (here / arg.text).resolve()
             name = f"include-{depth + 1}-{abs(hash(str(child))) % 10**8}.pbrt"
             (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, maxdepth,
-                                                  depth + 1, pixel_sampler))
+                                                  depth + 1, pixel_sampler, cut))
             edits.append((arg.start, arg.end, f'"{outdir / name}"'))
             continue
         if d not in _WITH_PARAMS:
@@ -130,7 +142,12 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
         emitting = spectrum is not None and d in ("LightSource", "AreaLightSource")
         pname = "I" if d == "LightSource" and type_ in _INTENSITY_LIGHTS else "L"
         replaced = False
+        cutting = cut and spectrum is None and d in ("LightSource", "AreaLightSource")
+        if cutting:
+            _cut_emitter(st, text, pname, lo, hi, path, edits)
         for p in st.params:
+            if cutting and p.name == pname:
+                continue
             if emitting and p.name == pname and p.type in ("spectrum", "rgb", "blackbody"):
                 start, end = p.decl.start, (p.values[-1].end if p.values else p.decl.end)
                 # Include a closing bracket right after the last value.
@@ -185,3 +202,39 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
     for start, end, new in sorted(edits, key=lambda e: e[0], reverse=True):
         text = text[:start] + new + text[end:]
     return text
+
+
+def _cut_emitter(st, text: str, pname: str, lo: float, hi: float, path: Path, edits: list) -> None:
+    """Cut an emitter's inline ``spectrum L/I`` to [lo, hi] (``edit_scene(cut_emitters=True)``)."""
+    from wavelength_pdf.spectra import make_spectrum
+
+    for p in st.params:
+        if p.name != pname:
+            continue
+        if p.type != "spectrum" or not p.values:
+            raise SpectrumError(f"{path}:{st.directive.line}: an emitter's {p.type} {pname} cannot be cut to "
+                                f"{lo:g}-{hi:g} nm (only a spectrum, inline or a file, can)")
+        if p.values[0].kind == "str":
+            from wavelength_pdf.spectra import read_spd
+
+            file = (path.parent / p.values[0].text).resolve()
+            if file.suffix.lower() != ".spd":
+                raise SpectrumError(f"{path}:{st.directive.line}: the emitter's spectrum {p.values[0].text!r} "
+                                    "is not a .spd file and cannot be cut")
+            sp = read_spd(file, lo=None, hi=None)
+        else:
+            numbers = [float(v.text) for v in p.values]
+            sp = make_spectrum("emitter", f"{path}:{st.directive.line}", numbers[0::2], numbers[1::2],
+                               where=f"{path}:{st.directive.line}")
+        # pbrt-v4 extends the end values beyond the samples: so does the cut, before cutting.
+        lam, val = np.asarray(sp.wavelengths), np.asarray(sp.values)
+        lam = np.concatenate([[min(lo, lam[0]) - 1.0], lam, [max(hi, lam[-1]) + 1.0]])
+        val = np.concatenate([[val[0]], val, [val[-1]]])
+        sp = make_spectrum("emitter", sp.source, lam, val)
+        start, end = p.decl.start, p.values[-1].end
+        if text[end:].lstrip().startswith("]"):
+            end = text.index("]", end) + 1
+        edits.append((start, end, f'"spectrum {pname}" {inline_spectrum(sp, lo, hi)}'))
+        return
+    raise SpectrumError(f"{path}:{st.directive.line}: an emitter without an inline spectrum {pname} cannot be "
+                        f"cut to {lo:g}-{hi:g} nm")

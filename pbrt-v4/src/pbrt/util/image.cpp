@@ -2,6 +2,8 @@
 // the implementations live in libstb, linked through cmake/stb.cmake) and OpenEXR.
 #include <pbrt/util/image.h>
 
+#include <pbrt/util/output_path.h>
+
 #include <stb_image.h>
 #include <stb_image_write.h>
 
@@ -233,19 +235,12 @@ void WriteImage(const std::string &path, const Image &image, const ImageMetadata
         throw FileError(path, "an image with channels " + image.channelNames.front() + ", ... can only be "
                               "written as EXR");
 
-    // Write beside the target, then rename: a failed write leaves no partial file.
-    std::string tmp = path + ".tmp" + std::to_string(::getpid());
-    try {
-        if (ext == ".exr") WriteEXR(tmp, path, image, metadata);
-        else WritePNG(tmp, path, image);
-    } catch (...) {
-        std::remove(tmp.c_str());
-        throw;
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw FileError(path, "cannot write image file");
-    }
+    // Write beside the target, then rename: a failed write, or a SIGTERM while writing,
+    // leaves no partial file (util/output_path.h).
+    TemporaryOutput tmp(path);
+    if (ext == ".exr") WriteEXR(tmp.Path(), path, image, metadata);
+    else WritePNG(tmp.Path(), path, image);
+    if (!tmp.Commit()) throw FileError(path, "cannot write image file");
 }
 
 }  // namespace pbrt
