@@ -273,8 +273,8 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
         try:
             from wavelength_pdf.evaluation import render_mitsuba
         except ImportError as e:
-            raise ValueError(f"--renderer mitsuba needs Mitsuba 3: pip install "
-                             f"'wavelength-pdf[mitsuba]' ({e})") from None
+            raise ValueError(f"--renderer mitsuba needs Mitsuba 3 (the mitsuba extra): pip install "
+                             f"mitsuba ({e})") from None
         ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
                                      optimizer_progress=optimizing)
     else:
