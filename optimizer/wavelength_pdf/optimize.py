@@ -141,9 +141,9 @@ def optimize_spectrum(
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
     if solver == "ipopt" and importlib.util.find_spec("cyipopt") is None:
-        raise ValueError("--solver ipopt needs cyipopt, an optional dependency: install it with "
-                         "pip install 'wavelength-pdf[ipopt]' (it builds against Ipopt, e.g. "
-                         "Debian's coinor-libipopt-dev)")
+        raise ValueError("--solver ipopt needs cyipopt, an optional dependency (the ipopt extra): "
+                         "install it with pip install cyipopt (it builds against Ipopt: Debian's "
+                         "coinor-libipopt-dev liblapack-dev libblas-dev pkg-config)")
     t0 = time.monotonic()
     if max_seconds is not None and not (math.isfinite(max_seconds) and max_seconds > 0):
         raise ValueError(f"max_seconds must be a finite number of seconds > 0, got {max_seconds!r}")

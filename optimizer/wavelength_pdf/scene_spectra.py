@@ -418,7 +418,7 @@ def whole_scene_spectrum(path: str | Path, lo: float = 380.0, hi: float = 780.0,
     (areas after transforms, per-triangle ``power``, RGB and blackbody emission, the scene
     radius of infinite lights); this module only reads statements. The renderer is found as
     the evaluation finds it (``pbrt``, else ``$WAVELENGTH_PDF_PBRT``, else the checkout's
-    ``build/pbrt``, else ``pbrt`` on ``PATH``; design §7).
+    ``build/pbrt``, else the installed wheel's own, else ``pbrt`` on ``PATH``; design §7).
 
     Raises
     ------

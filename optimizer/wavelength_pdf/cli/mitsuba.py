@@ -28,7 +28,7 @@ def cmd_mitsuba(args: argparse.Namespace) -> int:
     try:
         from wavelength_pdf.mitsuba.scenes import render_file
     except ImportError as e:
-        raise BadInput(f"Mitsuba 3 is not installed: pip install 'wavelength-pdf[mitsuba]' ({e})") from None
+        raise BadInput(f"Mitsuba 3 is not installed (the package's mitsuba extra): pip install mitsuba ({e})") from None
 
     paths = [p for group in args.append for p in group.split(";") if p]
     out = render_file(args.scene, args.output, variant=args.mode, spp=args.spp, sensor=args.sensor,
@@ -45,8 +45,8 @@ def add_parser(sub) -> None:
                     "as Mitsuba's own command would (which cannot load a plugin written in Python: "
                     "it says 'Plugin \"wavelength_table\" not found'). In the scene, put <texture "
                     "type=\"wavelength_table\" name=\"srf\"><string name=\"filename\" "
-                    "value=\"table.csv\"/></texture> in the <sensor>. Needs Mitsuba 3 (pip install "
-                    "'wavelength-pdf[mitsuba]'), not pbrt.")
+                    "value=\"table.csv\"/></texture> in the <sensor>. Needs Mitsuba 3 (the mitsuba extra: "
+                    "pip install mitsuba), not pbrt.")
     m.add_argument("scene", type=Path, metavar="SCENE.xml", help="a Mitsuba 3 XML scene")
     m.add_argument("-o", "--output", type=Path, default=None, metavar="FILE",
                    help="image to write (default: the scene's name with .exr, beside the scene, as "

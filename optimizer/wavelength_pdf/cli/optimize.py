@@ -186,7 +186,7 @@ def add_parser(sub, names: list[str]) -> None:
                         "reflectance)")
     o.add_argument("--pbrt", metavar="PATH", default=None,
                    help="with --whole-scene or --reflectances scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
-                        "else the checkout's build/pbrt, else pbrt on PATH)")
+                        "else the checkout's build/pbrt, else the wheel's own, else pbrt on PATH)")
     solver_args(o, names)
     range_args(o)
     o.add_argument("--colour-bar", "--color-bar", dest="colour_bar", metavar="PNG",

@@ -79,7 +79,7 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
     p.add_argument("--nthreads", type=int, default=None, help="renderer threads (default: all cores)")
     p.add_argument("--pbrt", type=Path, default=None,
                    help=f"renderer binary (default: ${PBRT_ENV}, else the checkout's build/pbrt, "
-                        "else pbrt on PATH)")
+                        "else the wheel's own, else pbrt on PATH)")
     p.add_argument("--reflectances", default=None, metavar="SET",
                    help="optimize the tables for coloured surfaces (design §4.5): 'scene' (the "
                         "scene's materials), 'colorchecker' or a reflectance CSV (design §3.4)")
@@ -273,8 +273,8 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
         try:
             from wavelength_pdf.evaluation import render_mitsuba
         except ImportError as e:
-            raise ValueError(f"--renderer mitsuba needs Mitsuba 3: pip install "
-                             f"'wavelength-pdf[mitsuba]' ({e})") from None
+            raise ValueError(f"--renderer mitsuba needs Mitsuba 3 (the mitsuba extra): pip install "
+                             f"mitsuba ({e})") from None
         ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
                                      optimizer_progress=optimizing)
     else:

@@ -23,8 +23,15 @@ from wavelength_pdf.data import CHECKOUT, in_checkout
 REPO = CHECKOUT
 #: The checkout's own build of the renderer (scripts/setup.sh).
 CHECKOUT_PBRT = CHECKOUT / "build" / "pbrt"
+#: The renderer inside an installed wheel built with ``scripts/build_wheel.sh --with-pbrt``.
+BUNDLED_PBRT = Path(__file__).resolve().parents[1] / "_bin" / "pbrt"
 #: Environment variable naming the renderer binary.
 PBRT_ENV = "WAVELENGTH_PDF_PBRT"
+#: The ways to get a renderer, for the message when none is found.
+HOW_TO_GET_PBRT = (
+    "give --pbrt PATH or set $" + PBRT_ENV + "; or, in a checkout, build it (bash scripts/setup.sh) and "
+    "put it on PATH (cmake --install build --prefix ~/.local) or inside the wheel "
+    "(bash scripts/build_wheel.sh --with-pbrt build/pbrt)")
 
 
 class RendererNotFound(FileNotFoundError):
@@ -33,7 +40,8 @@ class RendererNotFound(FileNotFoundError):
 
 def find_pbrt(explicit: str | os.PathLike | None = None) -> Path:
     """The renderer binary: ``explicit`` (``--pbrt``), else ``$WAVELENGTH_PDF_PBRT``, else the
-    checkout's ``build/pbrt``, else ``pbrt`` on ``PATH``.
+    checkout's ``build/pbrt``, else the installed wheel's own (``wavelength_pdf/_bin/pbrt``),
+    else ``pbrt`` on ``PATH``.
 
     Raises
     ------
@@ -61,12 +69,15 @@ def find_pbrt(explicit: str | os.PathLike | None = None) -> Path:
         if usable(CHECKOUT_PBRT):
             return CHECKOUT_PBRT
         looked.append(f"{CHECKOUT_PBRT} (not built: bash scripts/setup.sh)")
+    if usable(BUNDLED_PBRT):
+        return BUNDLED_PBRT
+    looked.append(f"{BUNDLED_PBRT} (this wheel was built without --with-pbrt)")
     on_path = shutil.which("pbrt")
     if on_path:
         return Path(on_path)
     looked.append("pbrt on PATH (none)")
-    raise RendererNotFound("no renderer found; looked at: " + "; ".join(looked) +
-                           ". Give --pbrt PATH or set " + PBRT_ENV)
+    raise RendererNotFound("no renderer found; looked at: " + "; ".join(looked) + ". To get one: "
+                           + HOW_TO_GET_PBRT)
 
 
 class RenderError(RuntimeError):

@@ -37,8 +37,8 @@ def _mitsuba():
     try:
         import mitsuba
     except ImportError as e:
-        raise PluginError("Mitsuba 3 is not installed: pip install 'wavelength-pdf[mitsuba]' "
-                          f"(or pip install mitsuba) ({e})") from None
+        raise PluginError("Mitsuba 3 is not installed (the package's mitsuba extra): pip install "
+                          f"mitsuba ({e})") from None
     return mitsuba
 
 
