@@ -502,6 +502,81 @@ TEST(WavelengthTable, DefensiveMixtureRemovesZeroIntervals) {
 }
 
 // ---------------------------------------------------------------------------------------
+// Coverage (design §1.5): the measure, the thresholds and the warnings.
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+// Colour-matching functions equal to 1: every fraction is then a fraction of wavelengths.
+void FlatCmfs(double, double xyz[3]) { xyz[0] = xyz[1] = xyz[2] = 1.0; }
+
+}  // namespace
+
+TEST(Coverage, MeasuresTheGapAndTheEndsWhereALightEmits) {
+    // Mixture zero on [500, 520] inside a 380..780 nm table; a flat lamp over 360..830 nm.
+    const wt::Table t = TableWithMixtureGap();
+    const wt::Coverage c = wt::MeasureCoverage(t, [](double) { return 2.0; }, FlatCmfs);
+    ASSERT_EQ(c.gaps.size(), 1u);
+    EXPECT_EQ(c.gaps[0], std::make_pair(500.0, 520.0));
+    EXPECT_NEAR(c.gapLuminanceFraction, 20.0 / 470.0, 1e-12);
+    ASSERT_EQ(c.outside.size(), 2u);
+    EXPECT_EQ(c.outside[0], std::make_pair(360.0, 380.0));
+    EXPECT_EQ(c.outside[1], std::make_pair(780.0, 830.0));
+    EXPECT_NEAR(c.outsideLuminanceFraction, 70.0 / 470.0, 1e-12);
+    EXPECT_NEAR(c.outsideTristimulusFraction, 70.0 / 470.0, 1e-12);
+
+    const std::vector<std::string> w =
+        wt::CoverageWarnings(c, "this light", 380, 780, "table t.csv", "use a wider table");
+    ASSERT_EQ(w.size(), 2u);
+    EXPECT_EQ(w[0], "the wavelength sampling density is zero on [500, 520] nm, where this light "
+                    "emits (4.26% of its luminance): paths never carry those wavelengths, so the "
+                    "image is biased; mix a uniform share into the table with "
+                    "--wavelength-pdf-defensive 0.01 [table t.csv]");
+    EXPECT_EQ(w[1], "this light emits on [360, 380] and [780, 830] nm, outside the range of the "
+                    "wavelength table [380, 780] nm, where paths never carry wavelengths: the "
+                    "image misses 14.9% of its luminance (up to 14.9% of X, Y or Z). "
+                    "--wavelength-pdf-defensive only covers the table's range; extend the "
+                    "table's grid to 360..830 nm, or use a wider table [table t.csv]");
+    // Without another fix the sentence ends after the grid.
+    EXPECT_NE(wt::CoverageWarnings(c, "a light", 380, 780, "t").back().find(
+                  "grid to 360..830 nm [t]"), std::string::npos);
+}
+
+TEST(Coverage, NoWarningWhereTheLightIsDarkOrBelowTheThresholds) {
+    const wt::Table t = TableWithMixtureGap();
+    // Dark in the gap and outside the range: covered.
+    auto inside = [](double l) { return l >= 380 && l <= 780 && !(l > 500 && l < 520) ? 1.0 : 0.0; };
+    const wt::Coverage covered = wt::MeasureCoverage(t, inside, FlatCmfs);
+    EXPECT_TRUE(covered.gaps.empty() && covered.outside.empty());
+    EXPECT_TRUE(wt::CoverageWarnings(covered, "this light", 380, 780, "t").empty());
+    // A faint floor outside the range: reported as measured, warned about only above 1e-4 of
+    // the luminance (here the CMFs are flat, so X, Y and Z share the fraction).
+    for (const double floor : {1e-5, 1e-3}) {
+        auto lamp = [&](double l) { return l >= 380 && l <= 780 ? (l > 500 && l < 520 ? 0.0 : 1.0) : floor; };
+        const wt::Coverage c = wt::MeasureCoverage(t, lamp, FlatCmfs);
+        ASSERT_EQ(c.outside.size(), 2u);
+        const double fraction = 70 * floor / (380 + 70 * floor);
+        EXPECT_NEAR(c.outsideLuminanceFraction, fraction, 1e-9 * fraction);
+        EXPECT_EQ(wt::CoverageWarnings(c, "this light", 380, 780, "t").size(),
+                  fraction > wt::kOutsideLuminanceWarnFraction ? 1u : 0u)
+            << floor;
+        EXPECT_EQ(fraction > wt::kOutsideLuminanceWarnFraction, floor == 1e-3);
+    }
+    // X alone outside the range, above its threshold while Y stays below its own.
+    auto redOutside = [](double l, double xyz[3]) {
+        const bool out = l < 380 || l > 780;
+        xyz[0] = out ? 1.0 : 1e-3;
+        xyz[1] = out ? 1e-9 : 1.0;
+        xyz[2] = 1.0;
+    };
+    auto flatLamp = [](double l) { return l > 500 && l < 520 ? 0.0 : 1.0; };
+    const wt::Coverage red = wt::MeasureCoverage(t, flatLamp, redOutside);
+    EXPECT_LT(red.outsideLuminanceFraction, wt::kOutsideLuminanceWarnFraction);
+    EXPECT_GT(red.outsideTristimulusFraction, wt::kOutsideTristimulusWarnFraction);
+    EXPECT_EQ(wt::CoverageWarnings(red, "this light", 380, 780, "t").size(), 1u);
+}
+
+// ---------------------------------------------------------------------------------------
 // Reading tables: both layouts.
 // ---------------------------------------------------------------------------------------
 
