@@ -42,7 +42,7 @@ __all__ = ["Table", "TableError", "read_table", "write_table", "normalize", "N_D
            "HEADER", "GRID_4X81"]
 
 from wavelength_pdf.files import MAX_INPUT_BYTES, read_input_text
-from wavelength_pdf.model import N_DENSITIES, RANGE, trapezoid
+from wavelength_pdf.model import N_DENSITIES, RANGE, normalize_density, trapezoid
 
 #: Column header of the CSV layout (design §2).
 HEADER = "lambda_nm,pdf0,pdf1,pdf2,pdf3"
@@ -150,10 +150,7 @@ def normalize(grid: np.ndarray, pdfs: np.ndarray) -> np.ndarray:
     already normalized to within rounding (1e-13) are kept as they are, so a table that was
     written normalized reads back bit for bit.
     """
-    pdfs = _exact_scaled(pdfs)
-    mass = _trapezoid(grid, pdfs)
-    scale = np.where(np.abs(mass - 1.0) <= 1e-13, 1.0, mass)
-    return pdfs / scale[:, None]
+    return normalize_density(grid, _exact_scaled(pdfs), keep_within=1e-13)
 
 
 def _format_number(v: float) -> str:
