@@ -747,26 +747,36 @@ struct EdgeCase {
     std::string reason;
 };
 
-std::vector<EdgeCase> EdgeCases() {
-    std::ifstream in(std::string(WT_EDGE_TABLES_DIR) + "/expected.csv");
-    std::vector<EdgeCase> out;
+// The rows of a manifest of tests/data/tables/edge (comment lines and the column header
+// skipped) as `columns` fields: the last one takes the rest of the line, commas included.
+std::vector<std::vector<std::string>> ManifestRows(const std::string &name, int columns) {
+    std::ifstream in(std::string(WT_EDGE_TABLES_DIR) + "/" + name);
+    std::vector<std::vector<std::string>> rows;
     std::string line;
     bool header = false;
     while (std::getline(in, line)) {
         if (line.empty() || line[0] == '#')
             continue;
         if (!header) {
-            header = true;  // file,nodes,line,reason
+            header = true;
             continue;
         }
         std::vector<std::string> f;
         std::size_t start = 0;
-        for (int i = 0; i < 3; ++i) {
+        for (int i = 0; i + 1 < columns; ++i) {
             const std::size_t comma = line.find(',', start);
             f.push_back(line.substr(start, comma - start));
             start = comma + 1;
         }
-        f.push_back(line.substr(start));  // the reason may hold commas
+        f.push_back(line.substr(start));
+        rows.push_back(std::move(f));
+    }
+    return rows;
+}
+
+std::vector<EdgeCase> EdgeCases() {
+    std::vector<EdgeCase> out;
+    for (const std::vector<std::string> &f : ManifestRows("expected.csv", 4)) {  // file,nodes,line,reason
         EdgeCase c;
         c.file = f[0];
         c.nodes = f[1].empty() ? 0 : std::stoi(f[1]);
@@ -811,23 +821,12 @@ TEST(WavelengthTable, EdgeTablesAsEveryReaderReadsThem) {
 // line ends, blanks and a byte-order mark change nothing, both layouts give one table, and
 // the densities are the exact renormalization written in the *-normalized.csv files.
 TEST(WavelengthTable, EdgeTablesThatAreTheSameTable) {
-    std::ifstream in(std::string(WT_EDGE_TABLES_DIR) + "/same.csv");
-    std::string line;
-    int pairs = 0;
-    bool header = false;
-    while (std::getline(in, line)) {
-        if (line.empty() || line[0] == '#')
-            continue;
-        if (!header) {
-            header = true;  // file,same_as
-            continue;
-        }
-        const std::size_t comma = line.find(',');
-        const std::string file = line.substr(0, comma), sameAs = line.substr(comma + 1);
-        SCOPED_TRACE(file + " = " + sameAs);
-        ++pairs;
-        const wt::Table a = wt::LoadTable(std::string(WT_EDGE_TABLES_DIR) + "/" + file);
-        const wt::Table b = wt::LoadTable(std::string(WT_EDGE_TABLES_DIR) + "/" + sameAs);
+    const std::vector<std::vector<std::string>> pairs = ManifestRows("same.csv", 2);  // file,same_as
+    ASSERT_GE(pairs.size(), 5u) << "tests/data/tables/edge/same.csv is missing or short";
+    for (const std::vector<std::string> &pair : pairs) {
+        SCOPED_TRACE(pair[0] + " = " + pair[1]);
+        const wt::Table a = wt::LoadTable(std::string(WT_EDGE_TABLES_DIR) + "/" + pair[0]);
+        const wt::Table b = wt::LoadTable(std::string(WT_EDGE_TABLES_DIR) + "/" + pair[1]);
         ASSERT_EQ(a.grid, b.grid);
         for (int k = 0; k < wt::kNumDensities; ++k)
             for (std::size_t i = 0; i < a.grid.size(); ++i)
@@ -835,7 +834,6 @@ TEST(WavelengthTable, EdgeTablesThatAreTheSameTable) {
                           1e-14 * std::max(std::abs(a.pdf[k][i]), std::abs(b.pdf[k][i])))
                     << k << " " << i << ": " << a.pdf[k][i] << " " << b.pdf[k][i];
     }
-    EXPECT_GE(pairs, 5) << "tests/data/tables/edge/same.csv is missing or short";
 }
 
 TEST(WavelengthTable, SubnormalDensitiesAreRenormalizedExactly) {
