@@ -157,6 +157,7 @@ def main() -> None:
              "pdf2 is negative (-0.5) at 390 nm"),
             ("grid-nan.csv", "380,1,1,1,1\nnan,1,1,1,1\n", 4, "wavelength is nan (must be finite)"),
             ("zero.csv", "380,1,0,1,1\n390,1,0,1,1\n400,1,0,1,1\n", 3, "pdf1 is zero everywhere"),
+            ("negative-zero.csv", "380,1,1,0,1\n390,1,1,-0,1\n", 3, "pdf2 is zero everywhere"),
             ("repeated.csv", "380,1,1,1,1\n390,1,1,1,1\n390,1,1,1,1\n", 5,
              "grid is not strictly increasing (390 then 390 nm)"),
             ("repeated-decimal.csv", "546.1,1,1,1,1\n546.1,1,1,1,1\n", 4,

@@ -450,7 +450,8 @@ inline Table Build(std::vector<double> grid, std::array<std::vector<double>, kNu
         const std::string pk = "pdf" + std::to_string(k);
         std::vector<double> &v = values[k];
         ScaleExactly(v);
-        if (std::all_of(v.begin(), v.end(), [](double x) { return Bits(x) == 0; }))
+        // -0 is 0 (ScaleExactly leaves a density without a non-zero magnitude as it is).
+        if (std::all_of(v.begin(), v.end(), [](double x) { return (Bits(x) & kMagnitude) == 0; }))
             throw TableError(name, valueLine(k, 0), pk + " is zero everywhere");
         // One operation per statement: no fused multiply-add, so the CDF has the same bits
         // as the Python sampler's (the test vectors rely on it where the CDF is flat).
