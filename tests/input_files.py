@@ -27,6 +27,14 @@ def edge_table_cases() -> list[tuple[str, int | None, int | None, str]]:
                  int(r["line"]) if r["line"] else None, r["reason"]) for r in rows]
 
 
+def same_table_pairs() -> list[tuple[str, str]]:
+    """(file, same_as) for each pair of ``EDGE_TABLES`` that must read as the same table
+    (tests/data/tables/edge/same.csv)."""
+    with open(EDGE_TABLES / "same.csv", newline="", encoding="utf-8") as fh:
+        rows = csv.DictReader(line for line in fh if not line.startswith("#"))
+        return [(r["file"], r["same_as"]) for r in rows]
+
+
 _READ = """
 import sys
 from importlib import import_module

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 
 from . import aot, grids, health as health_mod, init as init_mod, objective
-from .model import DEFAULT_GRID, trapezoid
+from .model import DEFAULT_GRID, normalize_density
 from .precision import float64
 from .result import Result
 from .solvers import DEFAULT_SOLVER, SOLVERS, SolverResult
@@ -39,11 +39,6 @@ if TYPE_CHECKING:  # annotations only: no import cost at run time
 
 __all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget", "starting_table",
            "DEFAULT_GRID", "SOLVERS"]
-
-
-def _normalize_rows(grid: np.ndarray, P: np.ndarray) -> np.ndarray:
-    P = np.asarray(P, dtype=np.float64)
-    return P / trapezoid(grid, P)[:, None]
 
 
 def evaluation_budget(solver: str = DEFAULT_SOLVER, grid: np.ndarray | str = "auto",
@@ -184,7 +179,7 @@ def optimize_spectrum(
         run = search(dict(solver_options or {}), left)
     history = list(run.history)
     offset[0] += run.nfev
-    P = _normalize_rows(grid, run.P)
+    P = normalize_density(grid, run.P)
     J, J_fine = objective.J_pair(problem, P)
     health = None  # the result's, when already computed
     left = None if max_seconds is None else t0 + max_seconds - time.monotonic()
@@ -194,7 +189,7 @@ def optimize_spectrum(
         options["n_keep"] = max(SECOND_SEARCH_KEEP, options.get("n_keep", 0))
         second = search(options, left)
         offset[0] += second.nfev
-        P2 = _normalize_rows(grid, second.P)
+        P2 = normalize_density(grid, second.P)
         J2, J2_fine = objective.J_pair(problem, P2)
         health2 = health_mod.health(problem, P2) if J2 < J else None  # only a better table needs it
         if health2 is not None and health2.accepted(health_init):
@@ -245,7 +240,7 @@ def evaluate_table(spectrum: Spectrum, table: Table, reflectances: ReflectanceSe
     objective.enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
     problem = objective.make_problem(spectrum, grid, reflectances)
-    P = _normalize_rows(grid, table.pdfs)
+    P = normalize_density(grid, table.pdfs)
     P0 = init_mod.equal_mass_partition(problem)
     J, J_fine = objective.J_pair(problem, P)
     result = Result.judge(

@@ -40,6 +40,7 @@ from typing import Iterator
 
 import numpy as np
 
+from wavelength_pdf.emitters import emission_parameter
 from wavelength_pdf.files import InputFileError, read_regular_file
 from wavelength_pdf.pbrt_syntax import Param, Statement, Token, split_params, statements, tokenize  # noqa: F401,E501
 from wavelength_pdf.spectra import (
@@ -92,8 +93,6 @@ BLACKBODY_RANGE = (300.0, 1000.0, 1.0)
 #: (colour-science defaults to the rounded 1.4388e-2 of ITS-90; pbrt-v4 uses h, c, k_B).
 PLANCK_C2 = 6.62607015e-34 * 299792458.0 / 1.380649e-23
 
-# Light types whose spectrum parameter is the intensity I rather than the radiance L.
-_INTENSITY_LIGHTS = {"point", "spot", "goniometric", "projection"}
 
 
 class NotOptimizableWarning(UserWarning):
@@ -257,7 +256,7 @@ def scan_scene(path: str | Path) -> list[Emitter]:
             return Emitter(desc, where, None,
                            f"{where}: {desc} takes its emission from an image ({image}), "
                            f"not a lamp spectrum")
-        pname = "I" if kind == "LightSource" and type_ in _INTENSITY_LIGHTS else "L"
+        pname = emission_parameter(kind, type_)
         param = params.get(pname)
         if param is None:
             illum = COLOR_SPACE_ILLUMINANT.get(state["colorspace"], "stdillum-D65")

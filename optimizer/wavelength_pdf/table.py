@@ -42,7 +42,7 @@ __all__ = ["Table", "TableError", "read_table", "write_table", "normalize", "N_D
            "HEADER", "GRID_4X81"]
 
 from wavelength_pdf.files import MAX_INPUT_BYTES, read_input_text
-from wavelength_pdf.model import N_DENSITIES, RANGE, trapezoid
+from wavelength_pdf.model import N_DENSITIES, RANGE, normalize_density, trapezoid
 
 #: Column header of the CSV layout (design §2).
 HEADER = "lambda_nm,pdf0,pdf1,pdf2,pdf3"
@@ -150,10 +150,19 @@ def normalize(grid: np.ndarray, pdfs: np.ndarray) -> np.ndarray:
     already normalized to within rounding (1e-13) are kept as they are, so a table that was
     written normalized reads back bit for bit.
     """
-    pdfs = _exact_scaled(pdfs)
-    mass = _trapezoid(grid, pdfs)
-    scale = np.where(np.abs(mass - 1.0) <= 1e-13, 1.0, mass)
-    return pdfs / scale[:, None]
+    return normalize_density(grid, _exact_scaled(pdfs), keep_within=1e-13)
+
+
+def _format_number(v: float) -> str:
+    """The shortest ``%g`` text (6 to 17 digits) that reads back as ``v``: how both table
+    readers write a number in a message (the header's ``detail::FormatNumber``), so that they
+    report "390 then 390 nm" alike where ``repr`` would write "390.0"."""
+    v = float(v)
+    for digits in range(6, 17):
+        text = f"{v:.{digits}g}"
+        if float(text) == v:
+            return text
+    return f"{v:.17g}"
 
 
 def _validate(path: Path, grid: np.ndarray, pdfs: np.ndarray,
@@ -164,7 +173,8 @@ def _validate(path: Path, grid: np.ndarray, pdfs: np.ndarray,
         raise TableError(f"{path}:{line}: a table needs at least 2 grid nodes, got {grid.size}")
     for i in range(grid.size):
         if not np.isfinite(grid[i]):
-            raise TableError(f"{path}:{grid_lines[i]}: wavelength is {grid[i]} (must be finite)")
+            raise TableError(f"{path}:{grid_lines[i]}: wavelength is {_format_number(grid[i])} "
+                             "(must be finite)")
     for k in range(pdfs.shape[0]):
         for i in range(pdfs.shape[1]):
             v = pdfs[k, i]
@@ -173,14 +183,14 @@ def _validate(path: Path, grid: np.ndarray, pdfs: np.ndarray,
             if np.isinf(v):
                 raise TableError(f"{path}:{value_line(k, i)}: pdf{k} is infinite at {grid[i]:g} nm")
             if np.signbit(v) and _bits(np.array([v]))[0] & _MAGNITUDE:  # -0 is 0
-                raise TableError(f"{path}:{value_line(k, i)}: pdf{k} is negative ({float(v)!r}) "
+                raise TableError(f"{path}:{value_line(k, i)}: pdf{k} is negative ({_format_number(v)}) "
                                  f"at {grid[i]:g} nm")
     key = _order_key(grid)
     bad = np.flatnonzero(key[1:] <= key[:-1])
     if bad.size:
         i = int(bad[0]) + 1
         raise TableError(f"{path}:{grid_lines[i]}: grid is not strictly increasing "
-                         f"({float(grid[i - 1])!r} then {float(grid[i])!r} nm)")
+                         f"({_format_number(grid[i - 1])} then {_format_number(grid[i])} nm)")
     # Integrate each density with its peak brought into [2^-64, 2^64] and no subnormal value
     # left (exact, _exact_scaled), then divide: the renormalization is exact to rounding, or
     # the table is refused (design §2.3).

@@ -42,6 +42,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <istream>
 #include <limits>
 #include <locale>
@@ -449,7 +450,8 @@ inline Table Build(std::vector<double> grid, std::array<std::vector<double>, kNu
         const std::string pk = "pdf" + std::to_string(k);
         std::vector<double> &v = values[k];
         ScaleExactly(v);
-        if (std::all_of(v.begin(), v.end(), [](double x) { return Bits(x) == 0; }))
+        // -0 is 0 (ScaleExactly leaves a density without a non-zero magnitude as it is).
+        if (std::all_of(v.begin(), v.end(), [](double x) { return (Bits(x) & kMagnitude) == 0; }))
             throw TableError(name, valueLine(k, 0), pk + " is zero everywhere");
         // One operation per statement: no fused multiply-add, so the CDF has the same bits
         // as the Python sampler's (the test vectors rely on it where the CDF is flat).
@@ -875,6 +877,145 @@ inline std::vector<std::pair<double, double>> ZeroMixtureIntervals(const Table &
             out.back().second = t.grid[i + 1];
         else
             out.emplace_back(t.grid[i], t.grid[i + 1]);
+    }
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Coverage: emission a table never samples (design §1.5).
+// ---------------------------------------------------------------------------------------
+//
+// A path carries only wavelengths where the mixture density is positive; where a light emits
+// but the mixture is zero, that light is missing from the image however many samples are
+// taken. Two places can hide such emission: a gap inside the table's range (the defensive
+// mixture removes it) and the range outside [lambda_0, lambda_M] (only a wider grid helps).
+// The measure, the thresholds and the warnings live here so that every renderer built on
+// this header warns by one rule; wavelength_pdf.coverage is the optimizer's `show`.
+
+// Coverage is measured over the colour-matching functions' range [nm], by the midpoint rule
+// with this step: it sees a spectrum's 1 nm lines and the edges of 5 nm table segments.
+constexpr double kCoverageFirstNm = 360.0, kCoverageLastNm = 830.0, kCoverageStepNm = 0.1;
+// Emission outside the table's range below these fractions is not worth a warning: a table on
+// the default 380..780 nm grid misses about 1e-5 of the luminance of a lamp with a flat floor
+// (the CMFs are tiny at the ends); 1e-3 of a tristimulus value is about 0.1 CIEDE2000.
+constexpr double kOutsideLuminanceWarnFraction = 1e-4;
+constexpr double kOutsideTristimulusWarnFraction = 1e-3;
+
+// Where one emitter's light falls that a table does not sample. Fractions are of the
+// emitter's tristimulus integrals over kCoverageFirstNm..kCoverageLastNm.
+struct Coverage {
+    std::vector<std::pair<double, double>> gaps;     // zero-mixture stretches [nm] where it emits
+    double gapLuminanceFraction = 0;                 // of its luminance (Y) inside them
+    std::vector<std::pair<double, double>> outside;  // parts of the CMF range outside the grid
+    double outsideLuminanceFraction = 0;             // of its luminance (Y) there
+    double outsideTristimulusFraction = 0;           // the largest over X, Y and Z there
+};
+
+// The coverage of an emitter by a table whose grid spans [lo, hi] with zero-mixture intervals
+// `gaps` (ZeroMixtureIntervals). `emission(lambda)` is the emitter's spectrum and
+// `cmfs(lambda, xyz)` stores the colour-matching functions in xyz[3]: the renderer's own, so
+// that the header needs neither.
+template <typename Emission, typename Cmfs>
+Coverage MeasureCoverage(const std::vector<std::pair<double, double>> &gaps, double lo,
+                         double hi, const Emission &emission, const Cmfs &cmfs) {
+    Coverage c;
+    double total[3] = {0, 0, 0}, outside[3] = {0, 0, 0}, inGapsY = 0;
+    std::vector<bool> gapEmits(gaps.size(), false);
+    bool emitsBelow = false, emitsAbove = false;
+    const long n = std::lround((kCoverageLastNm - kCoverageFirstNm) / kCoverageStepNm);
+    for (long i = 0; i < n; ++i) {
+        const double lambda = kCoverageFirstNm + (double(i) + 0.5) * kCoverageStepNm;
+        const double e = emission(lambda);
+        if (!(e > 0))
+            continue;
+        double xyz[3];
+        cmfs(lambda, xyz);
+        const double w[3] = {e * xyz[0], e * xyz[1], e * xyz[2]};
+        for (int j = 0; j < 3; ++j)
+            total[j] += w[j];
+        if (lambda < lo || lambda > hi) {
+            (lambda < lo ? emitsBelow : emitsAbove) = true;
+            for (int j = 0; j < 3; ++j)
+                outside[j] += w[j];
+            continue;
+        }
+        for (std::size_t g = 0; g < gaps.size(); ++g)
+            if (lambda > gaps[g].first && lambda < gaps[g].second) {
+                gapEmits[g] = true;
+                inGapsY += w[1];
+            }
+    }
+    for (std::size_t g = 0; g < gaps.size(); ++g)
+        if (gapEmits[g])
+            c.gaps.push_back(gaps[g]);
+    if (emitsBelow)
+        c.outside.emplace_back(kCoverageFirstNm, lo);
+    if (emitsAbove)
+        c.outside.emplace_back(hi, kCoverageLastNm);
+    if (total[1] > 0) {
+        c.gapLuminanceFraction = inGapsY / total[1];
+        c.outsideLuminanceFraction = outside[1] / total[1];
+    }
+    for (int j = 0; j < 3; ++j)
+        if (total[j] > 0)
+            c.outsideTristimulusFraction = std::max(c.outsideTristimulusFraction, outside[j] / total[j]);
+    return c;
+}
+
+// The same for a table (its grid's range and its zero-mixture intervals).
+template <typename Emission, typename Cmfs>
+Coverage MeasureCoverage(const Table &t, const Emission &emission, const Cmfs &cmfs) {
+    return MeasureCoverage(ZeroMixtureIntervals(t), t.grid.front(), t.grid.back(), emission, cmfs);
+}
+
+// The warnings for one emitter (design §1.5), none when it is covered: emission in a gap
+// always, emission outside the range above the thresholds. `light` names it in the text
+// ("this light" after the caller's FILE:LINE:COL, else "a light"); `lo`, `hi` are the
+// table's range, `table` its description for the end of the text; `otherFix`, when not
+// empty, is offered after "extend the table's grid" (a renderer's own option).
+inline std::vector<std::string> CoverageWarnings(const Coverage &c, const std::string &light,
+                                                 double lo, double hi, const std::string &table,
+                                                 const std::string &otherFix = "") {
+    auto stream = [] {
+        std::ostringstream s;
+        s.imbue(std::locale::classic());
+        return s;
+    };
+    auto percent = [&](double f) {
+        std::ostringstream s = stream();
+        s << std::setprecision(3) << 100 * f << "%";
+        return s.str();
+    };
+    auto intervals = [&](const std::vector<std::pair<double, double>> &v) {
+        std::ostringstream s = stream();
+        for (std::size_t i = 0; i < v.size(); ++i) {
+            if (i)
+                s << (i + 1 == v.size() ? " and " : ", ");
+            s << "[" << v[i].first << ", " << v[i].second << "]";
+        }
+        s << " nm";
+        return s.str();
+    };
+    std::vector<std::string> out;
+    if (!c.gaps.empty()) {
+        std::ostringstream m = stream();
+        m << "the wavelength sampling density is zero on " << intervals(c.gaps) << ", where "
+          << light << " emits (" << percent(c.gapLuminanceFraction) << " of its luminance): "
+          << "paths never carry those wavelengths, so the image is biased; mix a uniform share "
+          << "into the table with --wavelength-pdf-defensive 0.01 [" << table << "]";
+        out.push_back(m.str());
+    }
+    if (!c.outside.empty() && (c.outsideLuminanceFraction > kOutsideLuminanceWarnFraction ||
+                               c.outsideTristimulusFraction > kOutsideTristimulusWarnFraction)) {
+        std::ostringstream m = stream();
+        m << light << " emits on " << intervals(c.outside) << ", outside the range of the "
+          << "wavelength table [" << lo << ", " << hi << "] nm, where paths never carry "
+          << "wavelengths: the image misses " << percent(c.outsideLuminanceFraction)
+          << " of its luminance (up to " << percent(c.outsideTristimulusFraction)
+          << " of X, Y or Z). --wavelength-pdf-defensive only covers the table's range; extend "
+          << "the table's grid to 360..830 nm" << (otherFix.empty() ? "" : ", or " + otherFix)
+          << " [" << table << "]";
+        out.push_back(m.str());
     }
     return out;
 }

@@ -275,25 +275,17 @@ def test_a_narrow_table_warns_about_emission_outside_its_range(pbrt, scene, tmp_
 # (b) Bad tables
 # ---------------------------------------------------------------------------------------------
 
-HEAD = "# a comment\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n380,1,1,1,1\n"
-BAD_TABLES = {
-    # design §2 class: (file text, line named, reason fragment)
-    "nan": (HEAD + "385,1,nan,1,1\n", 4, "pdf1 is NaN"),
-    "infinity": (HEAD + "385,1,1,inf,1\n", 4, "pdf2 is infinite"),
-    "negative": (HEAD + "385,1,1,1,-0.5\n", 4, "pdf3 is negative"),
-    "zero-everywhere": ("lambda_nm,pdf0,pdf1,pdf2,pdf3\n380,0,1,1,1\n385,0,1,1,1\n", 2, "pdf0 is zero everywhere"),
-    "not-increasing": (HEAD + "390,1,1,1,1\n390,1,1,1,1\n", 5, "not strictly increasing"),
-    "columns": (HEAD + "385,1,1,1,1,1\n", 4, "6 columns, expected 5"),
-    "one-node": (HEAD, 3, "at least 2 grid nodes"),
-    "4x81-ragged": ("\n".join([",".join(["1"] * 81)] * 3 + [",".join(["1"] * 80)]) + "\n", 4, "80 densities, expected 81"),
-}
+#: One file per reject class of design §2.3 from the shared edge cases (their line and reason
+#: in tests/data/tables/edge/expected.csv, which every table reader's test reads).
+BAD_TABLES = ["nan.csv", "inf.csv", "negative.csv", "zero.csv", "repeated.csv", "six-columns.csv",
+              "one-node.csv", "wide-ragged-short.csv"]
 
 
-@pytest.mark.parametrize("kind", sorted(BAD_TABLES))
+@pytest.mark.parametrize("kind", BAD_TABLES)
 def test_bad_table_stops_pbrt_before_rendering(pbrt, scene, tmp_path, kind):
-    text, line, reason = BAD_TABLES[kind]
-    table = tmp_path / f"{kind}.csv"
-    table.write_text(text)
+    line, reason = next((line, reason) for name, nodes, line, reason in edge_table_cases()
+                        if name == kind)
+    table = EDGE_TABLES / kind
     out = tmp_path / "never.exr"
     run = run_pbrt(pbrt, scene, out, "--wavelength-pdf", str(table), spp=64)
     assert run.returncode == 1, run.stderr

@@ -578,7 +578,7 @@ void SceneBuilder::LightSource(const std::string &name, ParsedParameterVector pa
     if (currentObject != 0) throw PbrtError(loc, "LightSource inside an object definition is not supported");
     CheckNoMotion(loc, "LightSource");
     ParameterDictionary dict(Concat(std::move(params), graphicsState.lightAttributes));
-    const char *specName = (name == "point" || name == "spot" || name == "goniometric" || name == "projection") ? "I" : "L";
+    const char *specName = EmissionParameterName("LightSource", name);
     SpectrumHandle spec = GetSpectrum(dict, specName, SpectrumType::Illuminant, *graphicsState.colorSpace);
     Light light = Light::Create(name, dict, graphicsState.ctm[0], spec, *graphicsState.colorSpace, loc);
     CheckUnused(dict, "LightSource \"" + name + "\"");
@@ -612,7 +612,8 @@ void SceneBuilder::Shape(const std::string &name, ParsedParameterVector params, 
         } else {
             const AreaLightDesc &al = *graphicsState.areaLight;
             lightDict.emplace(al.params);
-            L = GetSpectrum(*lightDict, "L", SpectrumType::Illuminant, *al.colorSpace);
+            L = GetSpectrum(*lightDict, EmissionParameterName("AreaLightSource", al.name),
+                            SpectrumType::Illuminant, *al.colorSpace);
         }
     }
     auto addLights = [&](std::shared_ptr<const TriangleMesh> mesh, const Sphere *sphere) {

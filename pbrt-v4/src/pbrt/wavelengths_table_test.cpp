@@ -429,8 +429,8 @@ Shape "sphere" "float radius" [1]
     ASSERT_EQ(found.size(), 1u);
     EXPECT_TRUE(found[0].gaps.empty());
     ASSERT_EQ(found[0].outside.size(), 2u);
-    EXPECT_EQ(found[0].outside[0], std::make_pair(Float(360), Float(450)));
-    EXPECT_EQ(found[0].outside[1], std::make_pair(Float(650), Float(830)));
+    EXPECT_EQ(found[0].outside[0], std::make_pair(360.0, 450.0));
+    EXPECT_EQ(found[0].outside[1], std::make_pair(650.0, 830.0));
     EXPECT_NEAR(found[0].outsideLuminanceFraction, outsideY(450, 650), 1e-4 * outsideY(450, 650));
     EXPECT_GT(found[0].outsideTristimulusFraction, found[0].outsideLuminanceFraction);
     auto warnings = UnsampledEmissionWarnings(s->wavelengths, s->lights);
