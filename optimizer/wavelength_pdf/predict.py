@@ -66,25 +66,27 @@ class PathColours:
 
 
 #: Tables are given extra grid nodes up to a multiple of this many (see :func:`padded`).
-GRID_CLASS = 128
+GRID_CLASS = 512
 
 
-def padded(table, size_class: int = GRID_CLASS):
+def padded(table, nodes=(), size_class: int = GRID_CLASS):
     """The same densities on a grid of a multiple of ``size_class`` nodes.
 
     A piecewise-linear density is unchanged by a node inserted inside a segment with the
-    interpolated value, so this changes no prediction; it lets the objective's compiled
-    functions (one per shape: ~15 s each) serve every table of a size class instead of
-    compiling once per table. Nodes are inserted at whole nanometres first: those are
-    already nodes of the objective (the CMFs' 1 nm grid), so its node union keeps its size;
-    then at the midpoints of the widest segments."""
+    interpolated value, so this changes no C(u) (J moves by its quadrature's error only:
+    more breakpoints). It lets the objective's compiled functions (one per array shape,
+    ~15 s each) serve every table and lamp of a size class instead of compiling once per
+    table: the nodes inserted first are those the objective adds anyway (``nodes``, the
+    lamp's own, and whole nanometres, the CMFs' grid), so that the objective's union of
+    spectrum, CMF and table nodes is the padded grid itself, the same size for every lamp
+    of the class; then midpoints of the widest segments."""
     from wavelength_pdf.table import Table
 
     grid = np.asarray(table.grid, dtype=np.float64)
-    want = -(-grid.size // size_class) * size_class
-    extra = np.arange(np.ceil(grid[0]), np.floor(grid[-1]) + 1.0)
-    extra = extra[~np.isin(extra, grid)][: want - grid.size]
-    new = np.union1d(grid, extra)
+    lo, hi = grid[0], grid[-1]
+    extra = np.union1d(np.asarray(nodes, dtype=np.float64), np.arange(np.ceil(lo), np.floor(hi) + 1.0))
+    new = np.union1d(grid, extra[(extra > lo) & (extra < hi)])
+    want = -(-new.size // size_class) * size_class
     while new.size < want:
         gaps = np.diff(new)
         take = np.argsort(-gaps, kind="stable")[: want - new.size]
@@ -116,7 +118,7 @@ def path_colours(table, spectrum, reflectances=None, points: int = U_POINTS) -> 
     from wavelength_pdf import objective
 
     objective.enable_compilation_cache()
-    table = padded(table)
+    table = padded(table, spectrum.wavelengths)
     problem = objective.make_problem(spectrum, grid=table.grid, reflectances=reflectances)
     u = (np.arange(points) + 0.5) / points
     P = np.asarray(table.pdfs, dtype=np.float64)
