@@ -75,7 +75,7 @@ def main(argv=None) -> int:
         return 2
     t0 = time.time()
     recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say)
-    BP.add_floor(recs, [c for c in ("stratified", "covariance") if c in a.candidates])
+    BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates])
     cands = [*a.candidates, *(f for f in BP.FLOORED if f.split("+")[0] in a.candidates)]
     prs = BP.pairs(recs, cands)
     summ = BP.summary(prs, cands)

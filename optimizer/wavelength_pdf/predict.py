@@ -17,7 +17,8 @@ problem scales the target to Y = 1).
   it is in the units of a squared error. It does not know N or the pixel sampler.
 - ``stratified``: E[CIEDE2000(mean of N samples of C(u), c)^2], u stratified over N strata
   (``sobol``) or independent (``independent``), by Monte Carlo over sample sets drawn from
-  C(u) tabulated on a fine grid of u.
+  C(u) tabulated on a fine grid of u. ``stratified-de``: E[CIEDE2000]^2, the same in
+  squared units, less driven by rare huge errors.
 - ``covariance``: the covariance of the mean of N samples (per-stratum covariances / N^2,
   or the whole covariance / N), mapped to Lab by the Jacobian at the target colour and
   measured by CIEDE2000's local quadratic form there (``covariance-lab``: by plain Lab
@@ -160,11 +161,13 @@ def _check(spp: int, pixel_sampler: str, points: int) -> None:
 
 
 def stratified_de2(pc: PathColours, spp: int, pixel_sampler: str = "sobol", sets: int = MC_SETS,
-                   seed: int = 0) -> float:
+                   seed: int = 0, power: int = 2) -> float:
     """Candidate (b): E[CIEDE2000(mean of ``spp`` samples of C(u), c)^2], by Monte Carlo.
 
     ``sobol``: one u per stratum (a (0,1)-sequence's 1-D projection, which pbrt-v4's Sobol
-    samplers give each dimension at power-of-two spp); ``independent``: u uniform. A u is one
+    samplers give each dimension at power-of-two spp); ``independent``: u uniform. With
+    ``power=1``, E[CIEDE2000] squared instead: the same up to the spread of the error when it
+    is Gaussian-like, far less driven by rare huge errors (fireflies). A u is one
     of the fine grid's cells (C at its midpoint): the grid resolves C(u) far finer than a
     stratum, so this is the continuous draw up to the grid's resolution."""
     K, U, _ = pc.C.shape
@@ -179,8 +182,8 @@ def stratified_de2(pc: PathColours, spp: int, pixel_sampler: str = "sobol", sets
     for k in range(K):
         mean = pc.C[k][idx].mean(axis=1)  # (sets, 3)
         de = delta_e2000(lab(mean), lab(pc.target[k])[None, :])
-        total += pc.weights[k] * float(np.mean(de * de))
-    return total
+        total += pc.weights[k] * float(np.mean(de ** power))
+    return total if power == 2 else total ** (2.0 / power)
 
 
 def _lab_jacobian(xyz: np.ndarray) -> np.ndarray:
@@ -250,6 +253,7 @@ def j_squared(pc: PathColours, spp: int, pixel_sampler: str = "sobol") -> float:
 CANDIDATES: dict[str, Callable[[PathColours, int, str], float]] = {
     "J": j_squared,
     "stratified": stratified_de2,
+    "stratified-de": lambda pc, spp, ps="sobol": stratified_de2(pc, spp, ps, power=1),
     "covariance": covariance_de2,
     "covariance-lab": lambda pc, spp, ps="sobol": covariance_de2(pc, spp, ps, metric="lab"),
 }

@@ -35,8 +35,8 @@ TABLE = "optimized"
 #: The two regimes: the ColorChecker (patches lit directly) and every other scene.
 REGIMES = ("colorchecker", "scenes")
 #: The predictions of :mod:`wavelength_pdf.predict` evaluated (``+floor`` variants are added).
-CANDIDATES = ("J", "stratified", "covariance", "covariance-lab")
-FLOORED = ("stratified+floor", "covariance+floor")
+CANDIDATES = ("J", "stratified", "stratified-de", "covariance", "covariance-lab")
+FLOORED = ("stratified+floor", "stratified-de+floor", "covariance+floor")
 LO, HI = 380.0, 780.0
 
 
@@ -170,7 +170,7 @@ def floor_of(meas: dict, job: str, spp: int) -> float:
     return meas[(job, G.FLOOR, lower[-1])]["de2"] * lower[-1] / spp if lower else float("nan")
 
 
-def add_floor(records: list[dict], bases: Sequence[str] = ("stratified", "covariance")) -> None:
+def add_floor(records: list[dict], bases: Sequence[str] = ("stratified", "stratified-de", "covariance")) -> None:
     """The ``+floor`` variants: s * prediction + floor, s fitted leaving the job out (module
     docstring)."""
     def groups(r):
