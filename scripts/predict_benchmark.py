@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Does the objective predict the image? Predicted against measured error ratios over the
-benchmark's jobs (issue 31; docs/benchmark.md, "Does the objective predict the image?").
+benchmark's jobs (docs/benchmark.md, "Does the objective predict the image?").
 
 Reads a finished benchmark's results.csv and the tables its rows rendered with (OUT/tables,
 OUT/jobs/.../optimized-scene.csv, SHARED/tables/reference-4x81), computes every prediction of

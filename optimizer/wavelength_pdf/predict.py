@@ -1,4 +1,4 @@
-"""Predicted image error of a wavelength table under a lamp (issue 31, "predict first").
+"""Predicted image error of a wavelength table under a lamp.
 
 The optimizer ranks tables by J (design §4.1), the mean CIEDE2000 of *one* path's colour
 estimate C(u). An image pixel averages N paths, and a low-discrepancy pixel sampler draws the

@@ -1,4 +1,4 @@
-"""Predicted against measured error ratios over a benchmark's jobs (issue 31): the pipeline on
+"""Predicted against measured error ratios over a benchmark's jobs: the pipeline on
 a tiny benchmark folder written here (no renders needed), and the script's refusal when the
 benchmark's material is missing."""
 from __future__ import annotations

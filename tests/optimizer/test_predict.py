@@ -1,4 +1,4 @@
-"""The predictions of a table's pixel error (wavelength_pdf.predict, issue 31)."""
+"""The predictions of a table's pixel error (wavelength_pdf.predict)."""
 from __future__ import annotations
 
 import numpy as np

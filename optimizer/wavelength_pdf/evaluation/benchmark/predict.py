@@ -1,4 +1,4 @@
-"""Does the objective predict the image? (issue 31; docs/benchmark.md)
+"""Does the objective predict the image? (docs/benchmark.md)
 
 For every job of a finished benchmark (its ``results.csv`` and the tables it rendered with,
 ``OUT/tables/``), every prediction of :mod:`wavelength_pdf.predict` is computed for the table
