@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .objective import Problem
+from .problem import Problem
 from .sampling import N_DENSITIES
 
 #: Gauss-Legendre rule exact for the cubic q * hat on each piece.
