@@ -100,12 +100,12 @@ def padded(table, nodes=(), size_class: int = GRID_CLASS):
 def _estimate_jit():
     import jax
 
-    from wavelength_pdf import objective
+    from wavelength_pdf import quadrature
 
     # objective.estimate runs op by op (seconds for 2^15 points); the same two steps jitted.
     def est(arr, P, u):
-        PN, FF = objective._normalized(arr["grid"], P)
-        return objective._table_estimate(arr, PN, FF, u)
+        PN, FF = quadrature.normalized(arr["grid"], P)
+        return quadrature.table_estimate(arr, PN, FF, u)
 
     return jax.jit(est)
 
@@ -117,10 +117,12 @@ def path_colours(table, spectrum, reflectances=None, points: int = U_POINTS) -> 
     import jax.numpy as jnp
 
     from wavelength_pdf import objective
+    from wavelength_pdf.compile_cache import enable_compilation_cache
+    from wavelength_pdf.problem import make_problem
 
-    objective.enable_compilation_cache()
+    enable_compilation_cache()
     table = padded(table, spectrum.wavelengths)
-    problem = objective.make_problem(spectrum, grid=table.grid, reflectances=reflectances)
+    problem = make_problem(spectrum, grid=table.grid, reflectances=reflectances)
     u = (np.arange(points) + 0.5) / points
     P = np.asarray(table.pdfs, dtype=np.float64)
     C = np.asarray(_estimate_jit()(problem.arrays, jnp.asarray(P), jnp.asarray(u)))

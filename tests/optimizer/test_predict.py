@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from wavelength_pdf import objective
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf import predict as P
 from wavelength_pdf import stratified
 from wavelength_pdf.spectra import Spectrum, load_spectrum
@@ -98,7 +99,7 @@ def test_linearised_covariance_agrees_with_monte_carlo(d65, fl2, ps, metrics):
     overestimates by a third, measured), so only Lab is checked there."""
     for lamp in (d65, fl2):
         table = stratified.stratified_table(lamp, "xyz", 380.0, 780.0)
-        problem = objective.make_problem(lamp, grid=table.grid)
+        problem = make_problem(lamp, grid=table.grid)
         pc = P.path_colours(table, lamp)
         lab2, de2 = _monte_carlo(problem, table, 64, ps, 3000, 7)
         for metric in metrics:
@@ -113,7 +114,7 @@ def test_stratified_candidate_agrees_with_continuous_monte_carlo(fl2):
     """Candidate (b) draws u from the fine grid's cells; a continuous draw gives the same
     expected squared CIEDE2000 within the two estimates' noise."""
     table = stratified.uniform_table(380.0, 780.0)
-    problem = objective.make_problem(fl2, grid=table.grid)
+    problem = make_problem(fl2, grid=table.grid)
     pc = P.path_colours(table, fl2)
     _, de2 = _monte_carlo(problem, table, 16, "sobol", 3000, 3)
     pred = P.stratified_de2(pc, 16, "sobol", sets=8192, seed=5)
@@ -124,7 +125,7 @@ def test_stratified_candidate_agrees_with_continuous_monte_carlo(fl2):
 def test_j_candidate_is_the_objective(fl2):
     table = stratified.stratified_table(fl2, "luminance", 380.0, 780.0)
     pc = P.path_colours(table, fl2)
-    J = objective.J(objective.make_problem(fl2, grid=table.grid), table.pdfs)
+    J = objective.J(make_problem(fl2, grid=table.grid), table.pdfs)
     # The padded grid adds u-breakpoints, which moves J only by its quadrature's error.
     np.testing.assert_allclose(np.sqrt(P.j_squared(pc, 16)), J, rtol=1e-4)
 

@@ -138,7 +138,7 @@ def test_a_scene_is_optimized_for_its_own_materials_by_default(pbrt, tmp_path, m
     cli.main(argv)
     cli.main(argv + ["--reflectances", "white"])
     monkeypatch.setenv("WAVELENGTH_PDF_PBRT", str(tmp_path / "no-pbrt"))
-    monkeypatch.setattr("wavelength_pdf.evaluation.render.in_checkout", lambda: False)
+    monkeypatch.setattr("wavelength_pdf.renderer.in_checkout", lambda: False)
     monkeypatch.setenv("PATH", str(tmp_path))
     cli.main(argv)
     assert seen == ["scene", None, None]
