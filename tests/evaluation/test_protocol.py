@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from wavelength_pdf.cli import main
-from wavelength_pdf.evaluation import commands, report
+from wavelength_pdf.cli import evaluate as commands
+from wavelength_pdf.evaluation import report
 from wavelength_pdf.evaluation.protocol import Config, evaluate
 from wavelength_pdf.spectra import load_spectrum
 from wavelength_pdf.table import read_table, write_table

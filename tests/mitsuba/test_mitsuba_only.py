@@ -35,7 +35,8 @@ XML = """<scene version="3.0.0">
 @pytest.fixture
 def no_pbrt(monkeypatch):
     """Any lookup of pbrt fails the test."""
-    from wavelength_pdf.evaluation import commands, render
+    from wavelength_pdf.cli import evaluate as commands
+    from wavelength_pdf.evaluation import render
 
     def refuse(*a, **k):
         raise AssertionError("pbrt was looked up by a Mitsuba-only command")

@@ -86,7 +86,7 @@ def test_the_installed_copy_renders_the_checkouts_pixels(tmp_path, pbrt):
 
 
 def test_published_names_shared_when_the_material_is_missing(tmp_path):
-    from wavelength_pdf.evaluation.commands import published_jobs
+    from wavelength_pdf.cli.evaluate import published_jobs
 
     with pytest.raises(FileNotFoundError) as missing:
         published_jobs(tmp_path / "nowhere")
@@ -103,7 +103,7 @@ def test_published_names_shared_when_the_material_is_missing(tmp_path):
 
 def test_published_default_for_an_installed_package_is_the_current_folder(monkeypatch, tmp_path):
     from wavelength_pdf import data
-    from wavelength_pdf.evaluation import commands
+    from wavelength_pdf.cli import evaluate as commands
 
     monkeypatch.setattr(data, "in_checkout", lambda: False)
     monkeypatch.chdir(tmp_path)

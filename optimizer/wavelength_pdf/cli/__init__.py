@@ -16,7 +16,7 @@ show TABLE
     Print a table's grid and normalization and, with ``--spectrum``, its objective and
     estimator health (:mod:`.show`).
 evaluate, grid, published, demo
-    The evaluation (design §6; :mod:`wavelength_pdf.evaluation.commands`).
+    The evaluation (design §6; :mod:`wavelength_pdf.cli.evaluate`).
 mitsuba SCENE.xml
     Render a Mitsuba 3 XML scene with the ``wavelength_table`` plugin registered (Mitsuba's
     own command cannot load it; :mod:`.mitsuba`).
@@ -180,7 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     mitsuba.add_parser(sub)
 
     # The evaluation (design §6): evaluate, grid, published and demo (the README's main job).
-    from wavelength_pdf.evaluation.commands import add_subcommands
+    from wavelength_pdf.cli.evaluate import add_subcommands
 
     add_subcommands(sub)
     return p

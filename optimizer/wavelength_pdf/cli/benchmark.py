@@ -40,7 +40,7 @@ def cmd_benchmark(args) -> int:
 
 
 def add_parser(sub, out: Path) -> None:
-    from wavelength_pdf.evaluation.commands import _cluster
+    from wavelength_pdf.cli.evaluate import _cluster
 
     b = sub.add_parser(
         "benchmark", help="every wavelength sampler side by side, as tables: error against spp and CPU time, "

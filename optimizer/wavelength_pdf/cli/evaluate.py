@@ -1,4 +1,5 @@
-"""The evaluation's subcommands of ``wavelength-pdf``: ``evaluate``, ``grid``, ``published``, ``demo``.
+"""The evaluation's subcommands of ``wavelength-pdf``: ``evaluate``, ``grid``, ``published``, ``demo``
+(the renderers they run: :mod:`wavelength_pdf.evaluation.backends`).
 
 ``demo`` is the README's main job: the project's own Cornell box (``scenes/cornell-box``) lit
 by the project's tri-band fluorescent spectrum, at a resolution and spp that fit a small
@@ -15,7 +16,8 @@ from pathlib import Path
 from typing import Sequence
 
 from wavelength_pdf import data, progress
-from wavelength_pdf.evaluation.protocol import (DEFAULT_METHODS, DEFAULT_SPP, Config, check_config, evaluate,
+from wavelength_pdf.evaluation.backends import BACKENDS, backend
+from wavelength_pdf.evaluation.protocol import (DEFAULT_METHODS, DEFAULT_SPP, Config, check_config,
                                                 finish, plan, write_rows, WHOLE_SCENE)
 from wavelength_pdf.evaluation.render import REPO
 from wavelength_pdf.renderer import PBRT_ENV, find_pbrt
@@ -87,7 +89,7 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
 
 
 def _renderer(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--renderer", choices=("pbrt", "mitsuba"), default="pbrt",
+    p.add_argument("--renderer", choices=tuple(BACKENDS), default="pbrt",
                    help="pbrt (build/pbrt, a .pbrt scene) or mitsuba (Mitsuba 3, llvm_ad_spectral, a .xml "
                         "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default; "
                         "needs no pbrt)")
@@ -158,7 +160,7 @@ def add_subcommands(sub) -> None:
     _cluster(pub)
     pub.set_defaults(func=cmd_published)
 
-    from wavelength_pdf.evaluation.benchmark.command import add_parser as add_benchmark
+    from wavelength_pdf.cli.benchmark import add_parser as add_benchmark
 
     add_benchmark(sub, OUT)
 
@@ -198,16 +200,17 @@ PUBLISHED = (
 
 def _config(args) -> Config:
     resolution = args.resolution or args.resolution_scale or args.default_resolution
-    if getattr(args, "renderer", "pbrt") == "mitsuba":
-        # Mitsuba-only users need no pbrt (design §6.4): nothing looks for it.
+    b = backend(getattr(args, "renderer", "pbrt"))
+    if not b.uses_pbrt:
+        # Users of another renderer need no pbrt (design §6.4): nothing looks for it.
         if args.pbrt is not None:
-            raise ValueError("--pbrt is not used with --renderer mitsuba")
-        if args.reflectances is not None:
-            raise ValueError("--reflectances needs the pbrt renderer (the scene's materials come "
-                             "from pbrt); with --renderer mitsuba, leave it out")
+            raise ValueError(f"--pbrt is not used with --renderer {b.name}")
         pbrt = None
     else:
         pbrt = find_pbrt(args.pbrt)
+    if not b.scene_queries and args.reflectances is not None:
+        raise ValueError("--reflectances needs the pbrt renderer (the scene's materials come "
+                         f"from pbrt); with --renderer {b.name}, leave it out")
     config = Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp,
                     truth_method=args.truth_method, truth_chunks=args.truth_chunks, resolution=resolution,
                     seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
@@ -242,7 +245,8 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
             bar=None, renderer: str = "pbrt"):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
     whole = spectrum_spec == WHOLE_SCENE
-    if renderer == "mitsuba" and (whole or config.reflectances is not None):
+    b = backend(renderer)
+    if not b.scene_queries and (whole or config.reflectances is not None):
         raise ValueError(f"'{WHOLE_SCENE}' and --reflectances need the pbrt renderer")
     spectrum, reflectances = job_inputs(scene, spectrum_spec, config)
 
@@ -270,17 +274,8 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
     if bar is not None and table is None:  # the table's optimization starts by compiling
         bar.set_postfix_str(f"{outdir.name}: optimizing the table: {progress.preparing_message()}",
                             refresh=True)
-    if renderer == "mitsuba":
-        try:
-            from wavelength_pdf.evaluation import render_mitsuba
-        except ImportError as e:
-            raise ValueError(f"--renderer mitsuba needs Mitsuba 3 (the mitsuba extra): pip install "
-                             f"mitsuba ({e})") from None
-        ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
-                                     optimizer_progress=optimizing)
-    else:
-        ev = evaluate(scene, spectrum, outdir, config, table=table, progress=say,
-                      optimizer_progress=optimizing, keep_emitters=whole, reflectances=reflectances)
+    ev = b.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
+                    optimizer_progress=optimizing, keep_emitters=whole, reflectances=reflectances)
     say("plots")
     job_outputs(ev, spectrum, outdir)
     return ev
@@ -458,8 +453,8 @@ def copy_report(outdir: Path, dest: Path) -> list[Path]:
 def cmd_demo(args) -> int:
     from wavelength_pdf.evaluation import report
     config = _config(args)
-    if args.renderer == "mitsuba" and args.scene == DEMO_SCENE:
-        args.scene = DEMO_SCENE.with_suffix(".xml")
+    if args.scene == DEMO_SCENE:  # the demo scene in the renderer's own format
+        args.scene = DEMO_SCENE.with_suffix(backend(args.renderer).scene_suffix)
     print(f"demo: {args.scene.relative_to(REPO) if args.scene.is_relative_to(REPO) else args.scene} "
           f"lit by {args.spectrum}; output in {args.outdir}", file=sys.stderr)
     with progress.bar(total=_images(config), desc="demo", file=sys.stderr, unit="image") as bar:
