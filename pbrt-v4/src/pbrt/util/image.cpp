@@ -171,9 +171,20 @@ void WriteEXR(const std::string &path, const std::string &target, const Image &i
                       Imf::Slice(Imf::FLOAT,
                                  (char *)const_cast<float *>(image.pixels.data() + c), xStride,
                                  yStride));
+        for (const auto &[name, values] : metadata.channels) {
+            if (values.size() != size_t(image.width) * size_t(image.height))
+                throw FileError(target, "channel \"" + name + "\" has " + std::to_string(values.size()) +
+                                            " values for " + std::to_string(image.width) + "x" +
+                                            std::to_string(image.height) + " pixels");
+            header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+            fb.insert(name, Imf::Slice(Imf::FLOAT, (char *)const_cast<float *>(values.data()),
+                                       sizeof(float), sizeof(float) * size_t(image.width)));
+        }
         Imf::OutputFile file(path.c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(image.height);
+    } catch (const PbrtError &) {
+        throw;
     } catch (const std::exception &e) {
         throw FileError(target, std::string("cannot write EXR image: ") + e.what());
     }

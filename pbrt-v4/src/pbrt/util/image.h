@@ -47,6 +47,9 @@ struct ImageMetadata {
     std::map<std::string, float> floats;
     std::map<std::string, std::array<float, 2>> float2s;
     std::map<std::string, std::string> strings;
+    // EXR only: further 32-bit float channels by name (such as "wavelengthTable.index"), each
+    // width x height values, row by row, top row first.
+    std::map<std::string, std::vector<float>> channels;
 };
 
 // Writes an image; the format comes from the extension:
