@@ -5,7 +5,9 @@ The geometry follows the layout of the classic Cornell box (a 2 x 2 x 2 room, a 
 tall box turned towards each other, a square lamp under the ceiling), written from scratch here
 so that the main job and the tests need nothing outside the repository. The lamp's spectrum is
 the project's synthetic tri-band fluorescent spectrum (spectra/tri-band-fluorescent.spd), which
-the evaluation replaces with the spectrum under study.
+the evaluation replaces with the spectrum under study. A copy of it is written beside the scene,
+which names it there: the folder is self-contained, so the installed package's copy of the
+scene (``wavelength_pdf._data.cornell_box``) renders as the checkout's does.
 
 The Mitsuba 3 version (scene.xml beside OUTPUT, meshes in meshes/*.obj) has the same
 geometry, reflectances (the same sRGB values, which both renderers turn into spectra by
@@ -19,6 +21,7 @@ Usage: .venv/bin/python scripts/make_cornell_box.py [OUTPUT]   (default: scenes/
 from __future__ import annotations
 
 import math
+import shutil
 import sys
 from pathlib import Path
 
@@ -192,14 +195,16 @@ def main() -> None:
     text += [
         "AttributeBegin  # Light: emits downwards (the side its triangles' normal faces)",
         'AreaLightSource "diffuse"',
-        '    "spectrum L" "../../spectra/tri-band-fluorescent.spd"',
+        f'    "spectrum L" "{Path(SPECTRUM).name}"',
         '    "float scale" [ 16 ]',
         'Material "diffuse" "rgb reflectance" [ 0 0 0 ]',
         mesh(*light) + "AttributeEnd",
     ]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("\n".join(text) + "\n")
-    print(f"wrote {out}")
+    # The lamp's spectrum beside the scene, byte for byte (the folder ships on its own).
+    shutil.copyfile(Path(__file__).resolve().parents[1] / SPECTRUM, out.parent / Path(SPECTRUM).name)
+    print(f"wrote {out} and {out.parent / Path(SPECTRUM).name}")
     write_mitsuba(out, walls, boxes)
 
 

@@ -8,7 +8,9 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 status=0
 ( cd build && ctest --output-on-failure --parallel "$(nproc)" ) || status=1
-.venv/bin/python -m pytest -q tests "$@" || status=1
+# One pytest worker per core, a test file per worker (module fixtures are built once): 11
+# minutes instead of 19 on two cores.
+.venv/bin/python -m pytest -q -n "$(nproc)" --dist loadfile tests "$@" || status=1
 if [ "${SANITIZE:-1}" != 0 ]; then
   bash scripts/fuzz.sh --ctest "${FUZZ_SECONDS:-30}" || status=1
 fi

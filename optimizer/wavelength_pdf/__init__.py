@@ -12,7 +12,20 @@ contracts are in docs/design.md, §1-§4)::
 
 Importing the package leaves JAX's global settings as they were: the optimizer runs in
 float64 inside its own calls.
+
+The public API (``__all__``; typed, ``py.typed``; ``help(wavelength_pdf.NAME)`` for each):
+
+- :func:`load_spectrum`, :func:`load_spectra` -> :class:`Spectrum` (design §3; bad input raises
+  :class:`SpectrumError`, ``path:line: reason``);
+- :func:`optimize_spectrum` (a :class:`Spectrum` -> :class:`Result`), :func:`evaluate_table`
+  (score any :class:`Table`), :func:`evaluation_budget` (evaluations a run may spend);
+- :func:`read_table`, :func:`write_table` -> :class:`Table` (design §2; :class:`TableError`).
+
+Everything else is internal and may change between releases (CHANGELOG.md says how versions
+and tags are made).
 """
+
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
@@ -35,8 +48,19 @@ _API = {
 
 __all__ = ["__version__", *_API]
 
+if TYPE_CHECKING:  # what type checkers and IDEs see: the real, typed objects (tested)
+    from wavelength_pdf.optimize import evaluate_table, evaluation_budget, optimize_spectrum
+    from wavelength_pdf.result import Result
+    from wavelength_pdf.spectra import Spectrum, SpectrumError, load_spectra, load_spectrum
+    from wavelength_pdf.table import Table, TableError, read_table, write_table
 
-def __getattr__(name: str):
+
+def __dir__() -> list[str]:
+    """The public API too (so that ``help(wavelength_pdf)`` documents every name)."""
+    return sorted(set(globals()) | set(__all__))
+
+
+def __getattr__(name: str) -> object:
     if name in _API:
         import importlib
 

@@ -9,7 +9,7 @@ and the report functions that is 2-3 s of CPU per process, a third of a short
 argument signature, the compiled executable itself (``jax.experimental.serialize_executable``)
 in ``<cache>/executables``; a later process loads it and calls it directly.
 
-The file name is a hash of the function's name, the argument signature (pytree structure,
+The file name is the function's name, :func:`environment_tag` and a hash of the function's name, the argument signature (pytree structure,
 shapes, dtypes, weak types, static arguments) and everything the compiled code depends on:
 the package's source files, the JAX and jaxlib versions, Python's version, ``XLA_FLAGS``
 and the CPU. The executable is the one a plain ``jax.jit`` call would run, so results are
@@ -17,8 +17,13 @@ the same with or without this cache. Anything that goes wrong (no cache director
 that does not load or does not run, arguments being traced by an outer jit) falls back to
 the plain jitted function; a file that does not load or run is deleted.
 
-Only the user's own cache directory is read: the files are pickles, like the executables
-in JAX's own cache, and must not come from anyone else.
+The files hold compiled machine code and a pickle, so a file planted in the folder would run
+whatever it says. Two guards (design §7): the folder must belong to the user and be writable
+by no one else (:func:`check_cache_folder`; otherwise no cache is used, with one warning,
+and neither is JAX's own, which lives in the same folder), and each file carries an
+HMAC-SHA256 of its name and content under a per-user secret key kept in the folder (``key``,
+mode 0600, owned by the user): a file without a valid digest is never unpickled, only
+deleted and compiled again.
 
 A compilation cannot be cut short, so a time cap (``optimize --max-seconds``) is kept by not
 starting one that would end past it: inside :func:`compile_deadline`, a call that would have
@@ -29,10 +34,13 @@ compilation of this process took (``DEFAULT_COMPILE_SECONDS`` before the first).
 from __future__ import annotations
 
 import hashlib
+import hmac
 import inspect
 import os
 import pickle
 import platform
+import secrets
+import stat
 import sys
 import tempfile
 import time
@@ -44,7 +52,7 @@ from typing import Any, Callable
 import jax
 
 _dir: Path | None = None
-_env_key: str | None = None
+_env_keys: dict[bool, str] = {}  # environment_key() by float64 mode
 
 #: What a compilation is expected to take before this process has timed one (seconds; the
 #: search's objective with its gradient takes 2-5 s on one core).
@@ -86,19 +94,115 @@ def _timed_compilation():
     _compile_seconds.append(time.monotonic() - t)
 
 
+def check_cache_folder(path: str | os.PathLike) -> str:
+    """Why the folder ``path`` may not hold compiled code, or '' when it may: it must be a
+    directory owned by this user and writable by neither group nor others (anyone who can
+    write there can make this process run their code)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError as e:
+        return f"cannot open it ({e.strerror})"
+    try:
+        st = os.fstat(fd)
+    finally:
+        os.close(fd)
+    if hasattr(os, "geteuid") and st.st_uid != os.geteuid():
+        return f"it belongs to another user (uid {st.st_uid})"
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return f"others may write in it (mode {stat.filemode(st.st_mode)})"
+    return ""
+
+
 def enable(path: str | os.PathLike | None) -> None:
-    """Keep executables in ``path`` (None: do not keep them)."""
-    global _dir
+    """Keep executables in ``path`` (None: do not keep them). A folder that
+    :func:`check_cache_folder` refuses is not used."""
+    global _dir, _key
+    _key = None
     if path is None:
         _dir = None
         return
     p = Path(path)
     try:
-        p.mkdir(parents=True, exist_ok=True)
+        p.mkdir(mode=0o700, parents=True, exist_ok=True)
     except OSError:
         _dir = None
         return
-    _dir = p
+    _dir = None if check_cache_folder(p) else p
+
+
+_key: bytes | None = None  # the secret of _dir, once read
+
+#: The first bytes of every cache file, then the 32-byte HMAC, then the pickle.
+_MAGIC = b"wavelength-pdf aot 1\n"
+
+
+def _open_own(path: Path, flags: int) -> int:
+    """A file descriptor of ``path``, refused (OSError) unless it is a regular file of this
+    user that only this user may read or write; symbolic links are not followed."""
+    fd = os.open(path, flags | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0))
+    st = os.fstat(fd)
+    if (not stat.S_ISREG(st.st_mode) or (hasattr(os, "geteuid") and st.st_uid != os.geteuid())
+            or st.st_mode & 0o077):
+        os.close(fd)
+        raise OSError(f"{path}: not a private file of this user")
+    return fd
+
+
+def _secret() -> bytes | None:
+    """The folder's secret key (32 random bytes in ``key``, created on first use), or None
+    when there is no usable one (then nothing is read from or written to the folder)."""
+    global _key
+    if _key is not None or _dir is None:
+        return _key
+    path = _dir / "key"
+    for _ in range(2):
+        try:
+            fd = _open_own(path, os.O_RDONLY)
+            with os.fdopen(fd, "rb") as fh:
+                data = fh.read(33)
+            if len(data) == 32:
+                _key = data
+            return _key
+        except FileNotFoundError:
+            pass
+        except OSError:
+            return None
+        try:  # first use: create it, private from the start (another process may race us)
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0),
+                         0o600)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(secrets.token_bytes(32))
+                fh.flush()
+                os.fsync(fh.fileno())
+        except FileExistsError:
+            pass
+        except OSError:
+            return None
+    return None
+
+
+def _digest(key: bytes, name: str, payload: bytes) -> bytes:
+    return hmac.new(key, name.encode() + b"\0" + payload, hashlib.sha256).digest()
+
+
+def _sealed(name: str, payload: bytes) -> bytes | None:
+    """The content of the cache file ``name`` for ``payload`` (None: no key)."""
+    key = _secret()
+    return None if key is None else _MAGIC + _digest(key, name, payload) + payload
+
+
+def _unsealed(path: Path, name: str) -> bytes:
+    """The payload of the cache file ``path`` written as ``name`` by this package; ValueError
+    for a file whose digest is not valid (written by anyone else, or damaged)."""
+    key = _secret()
+    if key is None:
+        raise ValueError("no key")
+    with os.fdopen(_open_own(path, os.O_RDONLY), "rb") as fh:
+        data = fh.read()
+    mac, payload = data[len(_MAGIC):len(_MAGIC) + 32], data[len(_MAGIC) + 32:]
+    if not (data.startswith(_MAGIC) and hmac.compare_digest(mac, _digest(key, name, payload))):
+        raise ValueError(f"{path}: not written by this package")
+    return payload
 
 
 def _cpu_key() -> str:
@@ -113,10 +217,12 @@ def _cpu_key() -> str:
     return platform.processor() or platform.machine()
 
 
-def environment_key() -> str:
-    """Hash of everything besides the arguments that the compiled code depends on."""
-    global _env_key
-    if _env_key is None:
+def environment_key(x64: bool | None = None) -> str:
+    """Hash of everything besides the arguments that the compiled code depends on; ``x64``:
+    for JAX's float64 mode on or off (default: as it is set now)."""
+    if x64 is None:
+        x64 = bool(jax.config.jax_enable_x64)
+    if x64 not in _env_keys:
         import jaxlib
 
         h = hashlib.sha256()
@@ -126,10 +232,17 @@ def environment_key() -> str:
             h.update(f.read_bytes())
         for part in (jax.__version__, getattr(jaxlib, "__version__", ""), sys.version,
                      platform.machine(), os.environ.get("XLA_FLAGS", ""), _cpu_key(),
-                     str(jax.config.jax_enable_x64)):
+                     str(x64)):
             h.update(b"\0" + str(part).encode())
-        _env_key = h.hexdigest()
-    return _env_key
+        _env_keys[x64] = h.hexdigest()
+    return _env_keys[x64]
+
+
+def environment_tag(x64: bool | None = None) -> str:
+    """The first 8 hex digits of :func:`environment_key`, written into every executable's file
+    name, so that ``wavelength_pdf.compile_cache`` can tell whether the cache holds code for
+    this installation without loading any (the optimizer runs with ``x64`` on)."""
+    return environment_key(x64)[:8]
 
 
 def _leaf_signature(x: Any):
@@ -207,13 +320,15 @@ class DiskJit:
         return out
 
     def _path(self, sig) -> Path:
-        key = hashlib.sha256(repr((self.name, sig, environment_key())).encode()).hexdigest()[:40]
-        return _dir / f"{self.name}-{key}.pkl"
+        env = environment_key()
+        key = hashlib.sha256(repr((self.name, sig, env)).encode()).hexdigest()[:40]
+        return _dir / f"{self.name}-{env[:8]}-{key}.pkl"
 
-    def _load(self, path: Path, args):
+    def _load(self, path: Path, args, name: str | None = None):
         from jax.experimental import serialize_executable
 
-        blob, in_tree, out_tree = pickle.loads(path.read_bytes())
+        # Unpickled only once its digest shows this package wrote it (the module's docstring).
+        blob, in_tree, out_tree = pickle.loads(_unsealed(path, name or path.name))
         compiled = serialize_executable.deserialize_and_load(blob, in_tree, out_tree)
         jax.block_until_ready(compiled(*args))  # fails here, not later, if it cannot run
         return compiled
@@ -231,12 +346,14 @@ class DiskJit:
         try:
             from jax.experimental import serialize_executable
 
-            data = pickle.dumps(serialize_executable.serialize(compiled))
+            data = _sealed(path.name, pickle.dumps(serialize_executable.serialize(compiled)))
+            if data is None:
+                return compiled
             fd, tmp = tempfile.mkstemp(dir=_dir, prefix=".tmp-")
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)
             try:
-                self._load(Path(tmp), args)  # keep only what loads and runs
+                self._load(Path(tmp), args, path.name)  # keep only what loads and runs
                 os.replace(tmp, path)
             finally:
                 Path(tmp).unlink(missing_ok=True)

@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import csv
+import ctypes
 import multiprocessing
 import os
+import signal
+import sys
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from wavelength_pdf.coverage import check_range
 from wavelength_pdf.produce import optimize_one
 from wavelength_pdf.result import SUMMARY_FIELDS, Result
 from wavelength_pdf.spectra import SpectrumError, load_spectra
@@ -87,6 +91,7 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
         sp = load_spectra(spec, lo=lo, hi=hi)
         if len(sp) != 1:
             raise SpectrumError(f"{spec}: expected one spectrum, got {len(sp)}")
+        check_range(sp[0], lo, hi)  # light beyond the table's ends (design §3.3)
         grid = job["grid"] if isinstance(job["grid"], str) else np.asarray(job["grid"])
         o = optimize_one(sp[0], out, grid, job["solver"], job["seed"], job["max_seconds"], None,
                          max_evals=job.get("max_evals"))
@@ -97,11 +102,56 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
         return _row(spec, "error", str(e))
 
 
-def _init_worker() -> None:
+def _init_worker(parent: int) -> None:
     """A worker's BLAS threads: one (several workers share the cores). XLA's thread count
-    comes with the parent's environment (``PJRT_NPROC``, :mod:`wavelength_pdf.threads`)."""
+    comes with the parent's environment (``PJRT_NPROC``, :mod:`wavelength_pdf.threads`).
+    And the worker dies with ``parent`` (:func:`_die_with_parent`)."""
     os.environ["OMP_NUM_THREADS"] = "1"
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    _die_with_parent(parent)
+
+
+#: prctl(2) option: the signal the kernel sends this process when its parent ends.
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent(parent: int) -> None:
+    """End this worker when ``parent`` (the batch process) ends, however it ends.
+
+    A worker busy optimizing (60-90 s, ~380 MB) does not look at its pipe to the parent, so
+    a parent killed by SIGKILL or SIGTERM (no cleanup runs) used to leave it running to the
+    end of its job. On Linux the kernel sends it SIGTERM when the parent ends
+    (``PR_SET_PDEATHSIG``; the parent starts its workers from its main thread, which lives as
+    long as it does); a parent that ended before the request was made is seen by the parent
+    pid having changed. Elsewhere the parent's own cleanup (:func:`_stop_workers`) is all.
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the running workers now, instead of waiting for
+    their jobs (an interrupted batch: Ctrl-C, or an error in the parent)."""
+    # The executor has no public way to stop a running job, and shutdown() forgets its
+    # processes: take them first.
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    for proc in procs:
+        try:
+            proc.terminate()
+        except (OSError, ValueError):
+            pass
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        try:
+            proc.join(timeout=5)
+        except (OSError, ValueError, AssertionError):
+            pass
 
 
 def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndarray | str,
@@ -143,11 +193,18 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
     else:
         # JAX is not fork-safe: workers are spawned (and inherit PJRT_NPROC).
         ctx = multiprocessing.get_context("spawn")
-        with cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
-                                    initializer=_init_worker) as pool:
+        # Not a with-block: its exit would wait for the executor again after an interrupt,
+        # when the workers are already being stopped.
+        pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
+                                      initargs=(os.getpid(),))
+        try:
             for fut in cf.as_completed([pool.submit(run_job, job) for job in todo]):
                 rows.append(fut.result())
                 report(rows[-1])
+        except BaseException:
+            _stop_workers(pool)
+            raise
+        pool.shutdown(wait=True)
     rows.sort(key=lambda r: r["input"])
     summary = outdir / "summary.csv"
     tmp = summary.with_name(f".{summary.name}.tmp")

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 
 from .colorimetry import cmfs
@@ -38,6 +40,12 @@ OUTSIDE_LUMINANCE_FRACTION = 1e-4
 OUTSIDE_TRISTIMULUS_FRACTION = 1e-3
 #: The defensive share the warnings suggest (design §1.5).
 SUGGESTED_DEFENSIVE_SHARE = 0.01
+#: Emission outside the table's range above this fraction of the luminance or of any of
+#: X, Y, Z: ``optimize`` and ``batch`` refuse the spectrum before any work (design §3.3).
+REFUSE_OUTSIDE_FRACTION = 1e-2
+#: The range a refusal suggests stays inside the renderer's (and the CMFs') 360..830 nm, on
+#: whole multiples of this step (nm), so that ``--grid-step`` 5 divides it.
+SUGGESTED_RANGE_STEP = 5.0
 
 Interval = tuple[float, float]
 
@@ -177,3 +185,39 @@ def coverage(grid: np.ndarray, pdfs: np.ndarray, spectrum) -> Coverage:
         outside_luminance_fraction=share(outside_parts, 1),
         outside_tristimulus_fraction=max(share(outside_parts, k) for k in range(3)),
         table_range=(lo, hi))
+
+
+def check_range(spectrum, lo: float, hi: float) -> list[str]:
+    """The rule for emission at or beyond a table's ends (design §3.3), for ``optimize`` and
+    ``batch`` before any work: renders with a table over [lo, hi] never sample the light the
+    spectrum emits outside it, and the optimizer does not see it either (its J and bias are
+    over the table's range).
+
+    Returns the warnings of :meth:`Coverage.warnings` when that light is above the reporting
+    thresholds of design §1.5 (what ``show --spectrum`` and pbrt warn about).
+
+    Raises
+    ------
+    wavelength_pdf.spectra.SpectrumError
+        When it carries more than ``REFUSE_OUTSIDE_FRACTION`` of the luminance or of any of
+        X, Y, Z: the message names the share, where the light is and a range that covers it.
+    """
+    from .spectra import SpectrumError
+
+    cov = coverage(np.array([lo, hi], dtype=np.float64), np.ones((4, 2)), spectrum)
+    if not cov.outside:
+        return []
+    if max(cov.outside_luminance_fraction, cov.outside_tristimulus_fraction) > REFUSE_OUTSIDE_FRACTION:
+        step = SUGGESTED_RANGE_STEP
+        a = min(x for x, _ in cov.outside)
+        b = max(y for _, y in cov.outside)
+        wide_lo = min(lo, max(360.0, step * math.floor(a / step)))
+        wide_hi = max(hi, min(830.0, step * math.ceil(b / step)))
+        raise SpectrumError(
+            f"{spectrum.source}: spectrum '{spectrum.name}' emits "
+            f"{_percent(cov.outside_luminance_fraction)} of its luminance (up to "
+            f"{_percent(cov.outside_tristimulus_fraction)} of X, Y or Z) on "
+            f"{_intervals(cov.outside)}, outside the table's range [{lo:g}, {hi:g}] nm: renders "
+            "with such a table never sample that light; optimize over a range that covers it, "
+            f"e.g. --range {wide_lo:g} {wide_hi:g} --grid-step {step:g} (design §3.3)")
+    return cov.warnings(spectrum.name) if cov.outside_matters else []

@@ -3,7 +3,10 @@
 
 In a checkout they are read where they are; an installed wheel carries them as package data
 (``wavelength_pdf/_data/``, mapped from the same folders by ``pyproject.toml``, so nothing is
-duplicated in the repository).
+duplicated in the repository). The Cornell box is self-contained: its lamp's spectrum lies
+beside ``scene.pbrt`` (a byte-for-byte copy of ``spectra/tri-band-fluorescent.spd``, which
+``scripts/make_cornell_box.py`` writes), so the installed copy renders and optimizes as the
+checkout's does.
 """
 from __future__ import annotations
 

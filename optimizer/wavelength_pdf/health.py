@@ -85,6 +85,11 @@ class Health:
         return f"bias={self.bias:.2e} std/c=({s[0]:.4g},{s[1]:.4g},{s[2]:.4g})"
 
 
+def _number(x: float) -> str:
+    """x for a message: never 'nan' (design §3.3)."""
+    return "not a number" if np.isnan(x) else f"{x:.3g}"
+
+
 def rejection(health: "Health", reference: "Health | None" = None, J: float | None = None,
               J_uniform: float | None = None) -> str:
     """Why a table is not accepted, or '' if it is: the project's one acceptance rule.
@@ -100,7 +105,7 @@ def rejection(health: "Health", reference: "Health | None" = None, J: float | No
         (``J > J_uniform``) is never accepted.
     """
     if not (np.isfinite(health.bias) and health.bias <= MAX_BIAS):
-        return f"relative bias {health.bias:.3g} exceeds {MAX_BIAS:g}"
+        return f"relative bias {_number(health.bias)} exceeds {MAX_BIAS:g}"
     if not np.all(np.isfinite(health.std)):
         return "std of the estimator is not finite"
     if reference is not None:
@@ -115,7 +120,7 @@ def rejection(health: "Health", reference: "Health | None" = None, J: float | No
             return f"std/c worse than the initialization's in channel(s) {ch}{where}"
     if J is not None and J_uniform is not None:
         if not np.isfinite(J):
-            return f"J is {J}"
+            return f"J is {_number(J)}"
         if J > J_uniform:
             return f"J {J:.6g} is worse than stratified uniform sampling's {J_uniform:.6g}"
     return ""
@@ -154,21 +159,33 @@ def health(problem: Problem, P) -> Health:
     glx, glw = objective.gauss_legendre(_BIAS_ORDER)
     mean, lost = _mean_in_wavelength_jit(problem.arrays, P, glx, glw)
     c = problem.c
-    bias_xyz = (np.asarray(mean) - c) / c
+    bias_xyz = _relative(np.asarray(mean) - c, c)
     _, _, m2 = objective.moments(problem, P)
-    std = np.sqrt(np.maximum(m2 - (np.asarray(mean) - c) ** 2, 0.0)) / c
+    std = _relative(np.sqrt(np.maximum(m2 - (np.asarray(mean) - c) ** 2, 0.0)), c)
     return Health(
         bias=float(np.max(np.abs(bias_xyz))),
         bias_xyz=bias_xyz,
         std=std,
-        missing_mass=np.asarray(lost) / c,
+        missing_mass=_relative(np.asarray(lost), c),
     )
+
+
+def _relative(x: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """x / c per channel, with 0 / 0 = 0: a channel whose exact integral c is 0 has an
+    integrand that is 0 wherever the lamp emits (z-bar above ~650 nm: a red or infrared lamp
+    has Z = 0), so every estimate of it is exactly 0, unbiased and without noise. Any other
+    x over a zero c (which rounding alone cannot give) is infinite, never NaN."""
+    x = np.asarray(x, dtype=np.float64)
+    c = np.broadcast_to(np.asarray(c, dtype=np.float64), x.shape)
+    out = np.where(x == 0, 0.0, np.inf)
+    np.divide(x, c, out=out, where=c != 0)
+    return out
 
 
 def uniform_health(problem: Problem) -> Health:
     """Health of stratified uniform sampling (unbiased; std from the u-quadrature)."""
     _, m1, m2 = objective.uniform_moments(problem)
     c = problem.c
-    b = (m1 - c) / c
-    std = np.sqrt(np.maximum(m2 - (m1 - c) ** 2, 0.0)) / c
+    b = _relative(m1 - c, c)
+    std = _relative(np.sqrt(np.maximum(m2 - (m1 - c) ** 2, 0.0)), c)
     return Health(bias=float(np.max(np.abs(b))), bias_xyz=b, std=std, missing_mass=np.zeros(np.shape(c)))

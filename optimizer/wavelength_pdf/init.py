@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .model import normalize_density, trapezoid
 from .objective import Problem
 from .sampling import N_DENSITIES
 
@@ -123,11 +124,10 @@ def hat_parts(problem: Problem, cuts: np.ndarray, grid: np.ndarray | None = None
 
 
 def _normalize_rows(problem: Problem, V: np.ndarray, grid: np.ndarray | None = None) -> np.ndarray:
-    hw = np.diff(problem.grid if grid is None else grid)
-    totals = np.sum(0.5 * (V[:, 1:] + V[:, :-1]) * hw[None, :], axis=1)
-    if not np.all(totals > 0):
+    grid = problem.grid if grid is None else grid
+    if not np.all(trapezoid(grid, V) > 0):
         raise ValueError(f"{problem.source}: the spectrum has no mass to partition")
-    return V / totals[:, None]
+    return normalize_density(grid, V)
 
 
 def equal_mass_partition(problem: Problem, grid: np.ndarray | None = None) -> np.ndarray:

@@ -85,14 +85,44 @@ def check_objective_nodes(n: int, table_nodes: int, what: str) -> None:
             "spectrum more coarsely, design §2.3)")
 
 
-def trapezoid(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
+def trapezoid(grid, values, xp=np):
     """Integral over ``grid`` along the last axis of piecewise-linear ``values`` (exact).
 
     Written out rather than ``np.trapezoid`` so that every caller sums in the same order
-    (tables written normalized read back bit for bit)."""
-    grid = np.asarray(grid, dtype=np.float64)
-    values = np.asarray(values, dtype=np.float64)
-    return np.sum(0.5 * (values[..., 1:] + values[..., :-1]) * np.diff(grid), axis=-1)
+    (tables written normalized read back bit for bit). ``xp`` is the array module: numpy
+    (the arrays are taken as float64), or ``jax.numpy`` where the caller is traced."""
+    if xp is np:
+        grid = np.asarray(grid, dtype=np.float64)
+        values = np.asarray(values, dtype=np.float64)
+    return xp.sum(0.5 * (values[..., 1:] + values[..., :-1]) * (grid[1:] - grid[:-1]), axis=-1)
+
+
+def normalize_density(grid, values, xp=np, keep_within: float = 0.0):
+    """Each density of ``values`` (along the last axis) divided by its trapezoid mass over
+    ``grid``, so that it integrates to 1 (design §1.1): the one normalization of the table
+    reader, the sampler, the optimizer and the Mitsuba plugin's table. ``xp`` as for
+    :func:`trapezoid` (``jax.numpy`` keeps it traceable and differentiable).
+
+    ``keep_within`` > 0: a density whose mass is within it of 1 is kept as it is (the reader's
+    rule, so that a table written normalized reads back bit for bit, design §2.3). The
+    caller must not pass a density that is zero everywhere (the readers refuse it)."""
+    if xp is np:
+        values = np.asarray(values, dtype=np.float64)
+    mass = trapezoid(grid, values, xp)
+    if keep_within > 0:
+        mass = xp.where(xp.abs(mass - 1.0) <= keep_within, 1.0, mass)
+    return values / mass[..., None]
+
+
+def normalized_with_cdf(grid, p, xp=np):
+    """One density ``p`` normalized as by :func:`normalize_density`, and its CDF at the nodes
+    (F[0] = 0, F[M] = 1 exactly). ``xp`` as for :func:`trapezoid`."""
+    seg = 0.5 * (p[1:] + p[:-1]) * (grid[1:] - grid[:-1])
+    cum = xp.concatenate([xp.zeros((1,), dtype=seg.dtype), xp.cumsum(seg)])
+    total = cum[-1]
+    # x / x == 1 exactly in IEEE arithmetic, so F[M] is exactly 1. XLA may sum the prefixes
+    # in different orders, so a plateau at the top can come out an ulp above 1: clip.
+    return p / total, xp.minimum(cum / total, 1.0)
 
 
 def product_integrals(x: np.ndarray, s0: np.ndarray, s1: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -39,6 +39,7 @@ jitted functions compile once per size class rather than once per spectrum.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -716,27 +717,38 @@ def enable_compilation_cache() -> str | None:
     """Keep compiled objectives on disk between runs (JAX's persistent compilation cache).
 
     Compiling the objective and its gradient takes 5-10 s per problem size; with the
-    cache a later run (another spectrum, another process) loads them in about a second.
+    cache a later run (another spectrum, another process) loads them in about a second
+    (``wavelength_pdf.compile_cache``: its place, size, ``warm`` and ``clear``).
     The objective's functions are also kept as whole executables (``aot``), which skips
     tracing and lowering them in a later process.
     The directory is ``$WAVELENGTH_PDF_JAX_CACHE`` if set (empty or ``off`` disables the
     cache), else ``$XDG_CACHE_HOME/wavelength-pdf/jax`` (``~/.cache/...``). The cache only
     holds compiled code: results do not depend on it. Returns the directory, or None.
+
+    Compiled code from the folder runs in this process, so a folder that another user owns
+    or that group or others may write to is not used (one warning, no cache; design §7); the
+    executables kept by ``aot`` also carry a digest under the user's own key.
     """
     global _cache_dir
     if _cache_dir is not None:
         return _cache_dir or None
-    env = os.environ.get("WAVELENGTH_PDF_JAX_CACHE")
-    if env is not None and env.strip().lower() in ("", "off", "0", "no"):
+    from wavelength_pdf import compile_cache
+
+    path = compile_cache.cache_dir()  # design §7: the folder, or None when turned off
+    if path is None:
         _cache_dir = ""
         return None
-    if env:
-        path = Path(env)
-    else:
-        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-        path = Path(base) / "wavelength-pdf" / "jax"
     try:
-        path.mkdir(parents=True, exist_ok=True)
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+        unsafe = aot.check_cache_folder(path)
+        if unsafe:
+            warnings.warn(f"not using the compile cache {path}: {unsafe}; compiled code there "
+                          "could have been written by someone else (make it yours with "
+                          "chmod 700, or set WAVELENGTH_PDF_JAX_CACHE to another folder)",
+                          RuntimeWarning, stacklevel=2)
+            _cache_dir = ""
+            aot.enable(None)
+            return None
         jax.config.update("jax_compilation_cache_dir", str(path))
         aot.enable(path / "executables")
         # Every compiled function, however quick to compile: a process compiles ~30.

@@ -21,25 +21,24 @@ import importlib.util
 import inspect
 import math
 import time
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from . import aot, grids, health as health_mod, init as init_mod, objective
-from .model import DEFAULT_GRID, trapezoid
+from .model import DEFAULT_GRID, normalize_density
 from .precision import float64
 from .result import Result
 from .solvers import DEFAULT_SOLVER, SOLVERS, SolverResult
 from .table import Table
 from .threads import single_threaded_blas
 
+if TYPE_CHECKING:  # annotations only: no import cost at run time
+    from .reflectances import ReflectanceSet
+    from .spectra import Spectrum
+
 __all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget", "starting_table",
            "DEFAULT_GRID", "SOLVERS"]
-
-
-def _normalize_rows(grid: np.ndarray, P: np.ndarray) -> np.ndarray:
-    P = np.asarray(P, dtype=np.float64)
-    return P / trapezoid(grid, P)[:, None]
 
 
 def evaluation_budget(solver: str = DEFAULT_SOLVER, grid: np.ndarray | str = "auto",
@@ -82,7 +81,7 @@ def _auto_grid(spectrum) -> np.ndarray:
 
 @float64
 def optimize_spectrum(
-    spectrum,
+    spectrum: Spectrum,
     *,
     grid: np.ndarray | str = "auto",
     solver: str = DEFAULT_SOLVER,
@@ -90,7 +89,7 @@ def optimize_spectrum(
     progress: Callable[[int, float], None] | None = None,
     max_seconds: float | None = None,
     solver_options: dict | None = None,
-    reflectances=None,
+    reflectances: ReflectanceSet | None = None,
 ) -> Result:
     """Find four wavelength densities on ``grid`` that minimize J for ``spectrum``.
 
@@ -137,9 +136,9 @@ def optimize_spectrum(
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
     if solver == "ipopt" and importlib.util.find_spec("cyipopt") is None:
-        raise ValueError("--solver ipopt needs cyipopt, an optional dependency: install it with "
-                         "pip install 'wavelength-pdf[ipopt]' (it builds against Ipopt, e.g. "
-                         "Debian's coinor-libipopt-dev)")
+        raise ValueError("--solver ipopt needs cyipopt, an optional dependency (the ipopt extra): "
+                         "install it with pip install cyipopt (it builds against Ipopt: Debian's "
+                         "coinor-libipopt-dev liblapack-dev libblas-dev pkg-config)")
     t0 = time.monotonic()
     if max_seconds is not None and not (math.isfinite(max_seconds) and max_seconds > 0):
         raise ValueError(f"max_seconds must be a finite number of seconds > 0, got {max_seconds!r}")
@@ -180,7 +179,7 @@ def optimize_spectrum(
         run = search(dict(solver_options or {}), left)
     history = list(run.history)
     offset[0] += run.nfev
-    P = _normalize_rows(grid, run.P)
+    P = normalize_density(grid, run.P)
     J, J_fine = objective.J_pair(problem, P)
     health = None  # the result's, when already computed
     left = None if max_seconds is None else t0 + max_seconds - time.monotonic()
@@ -190,7 +189,7 @@ def optimize_spectrum(
         options["n_keep"] = max(SECOND_SEARCH_KEEP, options.get("n_keep", 0))
         second = search(options, left)
         offset[0] += second.nfev
-        P2 = _normalize_rows(grid, second.P)
+        P2 = normalize_density(grid, second.P)
         J2, J2_fine = objective.J_pair(problem, P2)
         health2 = health_mod.health(problem, P2) if J2 < J else None  # only a better table needs it
         if health2 is not None and health2.accepted(health_init):
@@ -232,7 +231,7 @@ def _source(spectrum, reflectances) -> str:
 
 
 @float64
-def evaluate_table(spectrum, table: Table, reflectances=None) -> Result:
+def evaluate_table(spectrum: Spectrum, table: Table, reflectances: ReflectanceSet | None = None) -> Result:
     """Score any table (e.g. a reference table) for ``spectrum`` with the project's
     evaluator: the same record as :func:`optimize_spectrum`, judged by the same rule
     against the equal-mass initialization on the table's grid (``solver`` is ''); with
@@ -241,7 +240,7 @@ def evaluate_table(spectrum, table: Table, reflectances=None) -> Result:
     objective.enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
     problem = objective.make_problem(spectrum, grid, reflectances)
-    P = _normalize_rows(grid, table.pdfs)
+    P = normalize_density(grid, table.pdfs)
     P0 = init_mod.equal_mass_partition(problem)
     J, J_fine = objective.J_pair(problem, P)
     result = Result.judge(

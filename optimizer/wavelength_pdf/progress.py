@@ -3,6 +3,11 @@
 On a terminal: a tqdm bar (evaluations done of the budget, rate, time left, best J). Elsewhere
 (a log file, CI): a plain line at most every ``interval`` seconds and one at the end, instead
 of carriage-return redraws.
+
+Before the first evaluation the optimizer compiles (or loads from the compile cache) its
+objective: the line says so (``preparing``, e.g. :func:`preparing_message`) and shows no
+estimate of the time left, which is computed from the evaluations alone once they run (a
+first run's compilation, 30-60 s, would otherwise read as hours left).
 """
 from __future__ import annotations
 
@@ -28,10 +33,17 @@ class OptimizationProgress:
         Where to write (default stderr).
     interval : float
         Seconds between plain lines when ``stream`` is not a terminal.
+    preparing : str, optional
+        What happens before the first evaluation (default: compiling or loading the
+        objective, :func:`preparing_message`), shown until it runs; '' shows nothing.
     """
 
+    #: tqdm's layout before the first evaluation: what is going on and the time spent, no rate
+    #: and no estimate of the time left.
+    PREPARING_FORMAT = "{desc}: {elapsed}{postfix}"
+
     def __init__(self, name: str, total: int, enabled: bool = True, stream: TextIO | None = None,
-                 interval: float = 10.0, position: int | None = None):
+                 interval: float = 10.0, position: int | None = None, preparing: str | None = None):
         self.name, self.total, self.enabled = name, int(total), enabled
         self.stream = stream if stream is not None else sys.stderr
         self.interval = interval
@@ -39,33 +51,56 @@ class OptimizationProgress:
         self.step = 0
         self.start = time.monotonic()
         self.last_line = self.start
+        #: (time, step) of the first evaluation seen: the estimate of the time left counts
+        #: from here, not from the start (which includes compiling).
+        self.first: tuple[float, int] | None = None
         self.bar = None
+        if preparing is None:
+            preparing = preparing_message() if enabled else ""
+        self.preparing = preparing
         isatty = getattr(self.stream, "isatty", lambda: False)()
         if enabled and isatty:
             from tqdm import tqdm
 
             self.bar = tqdm(total=self.total, desc=name[:30], unit="eval", file=self.stream,
-                            leave=False, dynamic_ncols=True, position=position, mininterval=0.25)
+                            leave=False, dynamic_ncols=True, position=position, mininterval=0.25,
+                            bar_format=self.PREPARING_FORMAT if preparing else None,
+                            postfix=preparing or None)
+        elif enabled and preparing:
+            print(f"{self.name}: {preparing}", file=self.stream, flush=True)
 
     def __call__(self, step: int, J: float) -> None:
         if not self.enabled:
             return
         self.best = min(self.best, float(J))
         step = min(int(step), self.total)
+        now = time.monotonic()
+        if self.first is None:
+            self.first = (now, step)
+            if self.bar is not None:  # evaluations run: the normal bar, its clock from now
+                self.bar.bar_format = None
+                self.bar.reset(total=self.total)
         if self.bar is not None:
             self.bar.set_postfix_str(f"J={self.best:.5g}", refresh=False)
             self.bar.update(max(0, step - self.bar.n))
         self.step = max(self.step, step)
-        now = time.monotonic()
         if self.bar is None and now - self.last_line >= self.interval:
             self.last_line = now
             self._line(now)
 
+    def time_left(self, now: float) -> float | None:
+        """Seconds left at the rate of the evaluations so far (None before two are seen)."""
+        if self.first is None or not (self.first[1] < self.step < self.total):
+            return None
+        t0, s0 = self.first
+        return (now - t0) * (self.total - self.step) / (self.step - s0)
+
     def _line(self, now: float) -> None:
         elapsed = now - self.start
         left = ""
-        if 0 < self.step < self.total:
-            left = f", at most {elapsed * (self.total - self.step) / self.step:.0f} s left"
+        seconds = self.time_left(now)
+        if seconds is not None:
+            left = f", at most {seconds:.0f} s left"
         print(f"{self.name}: {self.step}/{self.total} evaluations, best J {self.best:.5g}, "
               f"{elapsed:.0f} s{left}", file=self.stream, flush=True)
 
@@ -75,6 +110,22 @@ class OptimizationProgress:
             self.bar = None
         elif self.enabled and self.step:
             self._line(time.monotonic())
+
+
+def preparing_message() -> str:
+    """What the optimizer does before its first evaluation, from the compile cache's state:
+    compiling once (a cold cache, or none) or loading compiled code (design §7)."""
+    from wavelength_pdf import compile_cache
+
+    folder = compile_cache.cache_dir()
+    if folder is None:
+        return (f"compiling the optimizer (usually {compile_cache.FIRST_COMPILE}; no compile "
+                f"cache: ${compile_cache.ENV} is off)")
+    if not compile_cache.is_warm(folder):
+        return (f"compiling the optimizer once (usually {compile_cache.FIRST_COMPILE}; kept in "
+                f"{folder} for later runs)")
+    return (f"loading the compiled optimizer from {folder} (a grid of a new size compiles "
+            f"once, {compile_cache.FIRST_COMPILE})")
 
 
 class _PlainLines:

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wavelength_pdf.files import MAX_INPUT_BYTES, InputFileError, read_regular_file
 from wavelength_pdf.spectra import SpectrumError
 
 __all__ = ["ReflectanceSet", "colorchecker", "read_reflectances", "scene_reflectances",
@@ -134,14 +135,15 @@ def read_reflectances(path: str | os.PathLike, lo: float = 380.0,
     """
     path = Path(path)
     where = str(path)
+    # A regular file of at most 64 MiB (design §3.4): a device or FIFO fails at once.
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise SpectrumError(f"{where}: no such reflectance file") from None
-    except IsADirectoryError:
-        raise SpectrumError(f"{where}: is a directory, not a reflectance file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise SpectrumError(f"{where}: cannot read ({getattr(e, 'strerror', None) or e})") from None
+        text = read_regular_file(path, "reflectance", MAX_INPUT_BYTES).decode("utf-8-sig")
+    except InputFileError as e:
+        if e.reason == "no such file":
+            raise SpectrumError(f"{where}: no such reflectance file") from None
+        raise SpectrumError(str(e)) from None
+    except UnicodeDecodeError as e:
+        raise SpectrumError(f"{where}: cannot read ({e})") from None
     header: list[str] | None = None
     rows: list[list[float]] = []
     lines: list[int] = []

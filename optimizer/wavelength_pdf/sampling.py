@@ -25,6 +25,7 @@ import jax.numpy as jnp
 Array = jax.Array
 
 from .model import N_DENSITIES  # noqa: E402  (wavelengths per path; design §1)
+from . import model as _model  # noqa: E402
 
 
 def _segment_widths(grid: Array) -> Array:
@@ -32,7 +33,8 @@ def _segment_widths(grid: Array) -> Array:
 
 
 def normalize(grid: Array, p: Array) -> Array:
-    """Scale node values so that the piecewise-linear density integrates to 1.
+    """Scale node values so that the piecewise-linear density integrates to 1
+    (``model.normalize_density`` in jax.numpy, so that it can be traced).
 
     Parameters
     ----------
@@ -47,22 +49,12 @@ def normalize(grid: Array, p: Array) -> Array:
         ``p / trapezoid(p, grid)``. The caller must not pass a density that is zero
         everywhere (the table readers reject it).
     """
-    grid = jnp.asarray(grid)
-    p = jnp.asarray(p)
-    total = jnp.sum(0.5 * (p[1:] + p[:-1]) * _segment_widths(grid))
-    return p / total
+    return _model.normalize_density(jnp.asarray(grid), jnp.asarray(p), xp=jnp)
 
 
 def _normalized_with_cdf(grid: Array, p: Array) -> tuple[Array, Array]:
     """Normalized node values and the CDF at the nodes (F[0] = 0, F[M] = 1 exactly)."""
-    grid = jnp.asarray(grid)
-    p = jnp.asarray(p)
-    seg = 0.5 * (p[1:] + p[:-1]) * _segment_widths(grid)
-    cum = jnp.concatenate([jnp.zeros((1,), dtype=seg.dtype), jnp.cumsum(seg)])
-    total = cum[-1]
-    # x / x == 1 exactly in IEEE arithmetic, so F[M] is exactly 1. XLA may sum the prefixes
-    # in different orders, so a plateau at the top can come out an ulp above 1: clip.
-    return p / total, jnp.minimum(cum / total, 1.0)
+    return _model.normalized_with_cdf(jnp.asarray(grid), jnp.asarray(p), xp=jnp)
 
 
 def cdf(grid: Array, p: Array) -> Array:

@@ -40,6 +40,8 @@ from typing import Iterator
 
 import numpy as np
 
+from wavelength_pdf.emitters import emission_parameter
+from wavelength_pdf.files import InputFileError, read_regular_file
 from wavelength_pdf.pbrt_syntax import Param, Statement, Token, split_params, statements, tokenize  # noqa: F401,E501
 from wavelength_pdf.spectra import (
     Spectrum,
@@ -91,8 +93,6 @@ BLACKBODY_RANGE = (300.0, 1000.0, 1.0)
 #: (colour-science defaults to the rounded 1.4388e-2 of ITS-90; pbrt-v4 uses h, c, k_B).
 PLANCK_C2 = 6.62607015e-34 * 299792458.0 / 1.380649e-23
 
-# Light types whose spectrum parameter is the intensity I rather than the radiance L.
-_INTENSITY_LIGHTS = {"point", "spot", "goniometric", "projection"}
 
 
 class NotOptimizableWarning(UserWarning):
@@ -216,14 +216,17 @@ def _read_spd_any(file: Path) -> Spectrum:
 # --------------------------------------------------------------------------------------
 
 def _read_scene_text(path: Path, where: str | None) -> str:
+    """A scene file's text: a regular file (as the renderer reads it, design §5.5; no size
+    cap), so that a device or FIFO named as a scene or an Include fails at once."""
     try:
-        return path.read_text(encoding="utf-8-sig", errors="replace")
-    except FileNotFoundError:
-        raise SpectrumError(f"{where or path}: no such file{f' ({path})' if where else ''}") from None
-    except IsADirectoryError:
-        raise SpectrumError(f"{where or path}: {path} is a directory, not a scene") from None
-    except OSError as e:
-        raise SpectrumError(f"{where or path}: cannot read {path} ({e.strerror})") from None
+        data = read_regular_file(path, "scene", max_bytes=None)
+    except InputFileError as e:
+        if e.reason == "no such file":
+            raise SpectrumError(f"{where or path}: no such file{f' ({path})' if where else ''}") from None
+        if e.reason.startswith("is a directory"):
+            raise SpectrumError(f"{where or path}: {path} is a directory, not a scene") from None
+        raise SpectrumError(f"{where or path}: {path}: {e.reason}") from None
+    return data.decode("utf-8-sig", errors="replace")
 
 
 def scan_scene(path: str | Path) -> list[Emitter]:
@@ -253,7 +256,7 @@ def scan_scene(path: str | Path) -> list[Emitter]:
             return Emitter(desc, where, None,
                            f"{where}: {desc} takes its emission from an image ({image}), "
                            f"not a lamp spectrum")
-        pname = "I" if kind == "LightSource" and type_ in _INTENSITY_LIGHTS else "L"
+        pname = emission_parameter(kind, type_)
         param = params.get(pname)
         if param is None:
             illum = COLOR_SPACE_ILLUMINANT.get(state["colorspace"], "stdillum-D65")
@@ -414,7 +417,7 @@ def whole_scene_spectrum(path: str | Path, lo: float = 380.0, hi: float = 780.0,
     (areas after transforms, per-triangle ``power``, RGB and blackbody emission, the scene
     radius of infinite lights); this module only reads statements. The renderer is found as
     the evaluation finds it (``pbrt``, else ``$WAVELENGTH_PDF_PBRT``, else the checkout's
-    ``build/pbrt``, else ``pbrt`` on ``PATH``; design §7).
+    ``build/pbrt``, else the installed wheel's own, else ``pbrt`` on ``PATH``; design §7).
 
     Raises
     ------

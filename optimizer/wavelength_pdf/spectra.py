@@ -30,6 +30,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from wavelength_pdf.files import MAX_INPUT_BYTES, read_input_text
 from wavelength_pdf.model import RANGE
 
 __all__ = [
@@ -234,14 +235,9 @@ def light_source(name: str) -> Spectrum:
 # --------------------------------------------------------------------------------------
 
 def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8-sig", errors="replace")
-    except FileNotFoundError:
-        raise SpectrumError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise SpectrumError(f"{path}: is a directory, not a spectrum file") from None
-    except OSError as e:
-        raise SpectrumError(f"{path}: cannot read ({e.strerror})") from None
+    """The text of a spectrum file: a regular file of at most 64 MiB (design §3.3), so that a
+    device or FIFO named as a spectrum fails at once instead of hanging or filling memory."""
+    return read_input_text(path, "spectrum", SpectrumError, MAX_INPUT_BYTES)
 
 
 def _number(token: str, where: str) -> float:

@@ -18,6 +18,10 @@
 //     `lambda_nm,pdf0,pdf1,pdf2,pdf3`, then one row per node;
 //   - headerless "4 x 81": four rows of 81 densities at 380, 385, ..., 780 nm.
 // Blank lines and '#' lines are skipped in both; a row may end with one trailing comma.
+// A line ends at LF, CR LF or a lone CR; any other control character is an error; fields are
+// trimmed of spaces and tabs; numbers are ASCII (design §2). A table file must be a regular
+// file of at most 64 MiB (design §2.3). Each density is renormalized exactly: one whose
+// largest value lies outside [2^-64, 2^64] is first scaled by a power of two (§2.3).
 // Bad input throws TableError("FILE:LINE: reason"); "FILE: reason" when no line applies
 // (a missing file, or a table built in memory with MakeTable).
 //
@@ -30,10 +34,15 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <istream>
 #include <limits>
 #include <locale>
@@ -42,6 +51,13 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#define WAVELENGTH_TABLE_POSIX 1
+#endif
 
 #ifndef WAVELENGTH_TABLE_HOST_DEVICE
 #define WAVELENGTH_TABLE_HOST_DEVICE
@@ -56,6 +72,9 @@ constexpr const char *kHeader = "lambda_nm,pdf0,pdf1,pdf2,pdf3";
 // Grid of the headerless layout: 81 nodes, 380..780 nm in 5 nm steps (design §2).
 constexpr int kWideNodes = 81;
 constexpr double kWideFirst = 380.0, kWideStep = 5.0;
+// The largest table file a reader accepts (design §2.3): far above any real table (0.1 nm
+// steps over 360..830 nm take ~0.5 MB), low enough that a wrong file cannot exhaust memory.
+constexpr std::size_t kMaxTableBytes = std::size_t(64) << 20;
 
 // A validated table: pdf[k] integrates to 1 by the trapezoid rule over grid, cdf[k][i] is
 // F_k(grid[i]) with cdf[k].front() == 0 and cdf[k].back() == 1 exactly.
@@ -302,6 +321,69 @@ inline std::string FormatNumber(double v) {
     return FormatDigits(v, 17);
 }
 
+// The IEEE 754 bits of a double, and back.
+inline std::uint64_t Bits(double v) {
+    std::uint64_t b;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+}
+inline double FromBits(std::uint64_t b) {
+    double v;
+    std::memcpy(&v, &b, sizeof v);
+    return v;
+}
+constexpr std::uint64_t kMagnitude = ~(std::uint64_t(1) << 63);
+constexpr std::uint64_t kFraction = (std::uint64_t(1) << 52) - 1;
+
+// An integer in the order of the finite double v (+0 and -0 equal, subnormals included),
+// from its bits: a renderer built to treat subnormal numbers as zero (-ffast-math and the
+// like set the FPU's DAZ/FTZ flags) would otherwise call 0 and 5e-324 equal.
+inline std::int64_t OrderKey(double v) {
+    const std::uint64_t b = Bits(v);
+    const std::int64_t magnitude = static_cast<std::int64_t>(b & kMagnitude);
+    return (b >> 63) ? -magnitude : magnitude;
+}
+
+// Scales the values of one density (finite, >= 0) by a power of two to a largest value in
+// [0.5, 1) when their largest value lies outside [2^-64, 2^64], and reads every value then
+// below 2^-1022 (a subnormal number, under 2^-958 of the largest) as 0 (design §2.3). On the
+// bits, with integers only: exact, and the same whatever the FPU does with subnormal numbers
+// (the Python reader, wavelength_pdf.table, does the same).
+inline void ScaleExactly(std::vector<double> &v) {
+    // value = sig * 2^e exactly, sig < 2^53, and the bit length of sig
+    auto decompose = [](std::uint64_t b, std::uint64_t *sig, int *e, int *length) {
+        const int biased = static_cast<int>(b >> 52);
+        *sig = biased > 0 ? (b & kFraction) | (std::uint64_t(1) << 52) : (b & kFraction);
+        *e = biased > 0 ? biased - 1075 : -1074;
+        *length = 0;
+        for (std::uint64_t s = *sig; s != 0; s >>= 1)
+            ++*length;
+    };
+    std::uint64_t peakBits = 0;  // the bits of non-negative doubles are in their order
+    for (double x : v)
+        peakBits = std::max(peakBits, Bits(x) & kMagnitude);
+    if (peakBits == 0)
+        return;
+    std::uint64_t sig;
+    int e, length;
+    decompose(peakBits, &sig, &e, &length);
+    const int peakTop = e + length - 1;  // the peak lies in [2^top, 2^(top + 1))
+    const bool powerOfTwo = sig == std::uint64_t(1) << (length - 1);
+    const bool inside = (peakTop >= -64 && peakTop < 64) || (peakTop == 64 && powerOfTwo);
+    const int shift = inside ? 0 : -(peakTop + 1);
+    for (double &x : v) {
+        const std::uint64_t b = Bits(x) & kMagnitude;
+        decompose(b, &sig, &e, &length);
+        const int top = e + length - 1 + shift;
+        if (b == 0 || top < -1022) {
+            x = 0.0;
+            continue;
+        }
+        const std::uint64_t mantissa = (sig << (53 - length)) & kFraction;
+        x = FromBits((static_cast<std::uint64_t>(top + 1023) << 52) | mantissa);
+    }
+}
+
 // Lines of the file that hold each node and each value (0 when the table is not from a file).
 struct SourceLines {
     std::vector<int> node;                                // line of grid[i]
@@ -343,53 +425,66 @@ inline Table Build(std::vector<double> grid, std::array<std::vector<double>, kNu
                 throw TableError(name, valueLine(k, i), what + "NaN" + where);
             if (std::isinf(v))
                 throw TableError(name, valueLine(k, i), what + "infinite" + where);
-            if (v < 0)
+            if (std::signbit(v) && (Bits(v) & kMagnitude) != 0)  // -0 is 0
                 throw TableError(name, valueLine(k, i),
                                  what + "negative (" + FormatNumber(v) + ")" + where);
         }
     }
     for (std::size_t i = 1; i < n; ++i)
-        if (!(grid[i] > grid[i - 1]))
+        if (!(OrderKey(grid[i]) > OrderKey(grid[i - 1])))
             throw TableError(name, nodeLine(i),
                              "grid is not strictly increasing (" + FormatNumber(grid[i - 1]) +
                                  " then " + FormatNumber(grid[i]) + " nm)");
     // Integrate each density (trapezoid rule, exact for piecewise-linear densities),
-    // then divide the node values and the cumulative sums by the total.
+    // then divide the node values and the cumulative sums by the total. A density whose
+    // largest value lies outside [2^-64, 2^64] is first scaled by a power of two to a largest
+    // value in [0.5, 1), and values then below 2^-1022 are read as 0 (ScaleExactly): summed
+    // as they are, subnormal values lose their digits (a table of 5e-324 everywhere
+    // integrated to 1.16 after renormalizing) and huge ones overflow. The renormalization
+    // is then exact to rounding, or the table is refused (design §2.3); a table written
+    // normalized is not scaled and reads back bit for bit.
     Table t;
     t.grid = std::move(grid);
     t.source = name;
     for (int k = 0; k < kNumDensities; ++k) {
+        const std::string pk = "pdf" + std::to_string(k);
+        std::vector<double> &v = values[k];
+        ScaleExactly(v);
+        // -0 is 0 (ScaleExactly leaves a density without a non-zero magnitude as it is).
+        if (std::all_of(v.begin(), v.end(), [](double x) { return (Bits(x) & kMagnitude) == 0; }))
+            throw TableError(name, valueLine(k, 0), pk + " is zero everywhere");
         // One operation per statement: no fused multiply-add, so the CDF has the same bits
         // as the Python sampler's (the test vectors rely on it where the CDF is flat).
         std::vector<double> cum(n, 0.0);
         for (std::size_t i = 0; i + 1 < n; ++i) {
             const double width = t.grid[i + 1] - t.grid[i];
-            const double mean = 0.5 * (values[k][i] + values[k][i + 1]);
+            const double mean = 0.5 * (v[i] + v[i + 1]);
             const double area = mean * width;
             cum[i + 1] = cum[i] + area;
         }
         const double total = cum[n - 1];
-        const std::string pk = "pdf" + std::to_string(k);
-        if (!(total > 0))
-            throw TableError(name, valueLine(k, 0), pk + " is zero everywhere");
         if (!std::isfinite(total))
             throw TableError(name, valueLine(k, 0),
-                             pk + " integrates to infinity (values too large)");
+                             pk + " integrates to infinity (the grid is too wide)");
+        // Every value is 0 or at least 2^-1022, so areas that underflow change a mass of at
+        // least 2^-900 by less than 1e-100 of it (only a grid narrower than ~1e-250 nm makes
+        // a smaller one); no value / total overflows either (< 2^965).
+        if (!(total >= std::ldexp(1.0, -900)))
+            throw TableError(name, valueLine(k, 0),
+                             pk + " cannot be normalized exactly (the grid is too narrow)");
         t.pdf[k].resize(n);
         t.cdf[k].resize(n);
         for (std::size_t i = 0; i < n; ++i) {
-            t.pdf[k][i] = values[k][i] / total;
+            t.pdf[k][i] = v[i] / total;
             t.cdf[k][i] = cum[i] / total;  // x / x == 1 exactly, so cdf.back() == 1
-            if (!std::isfinite(t.pdf[k][i]))
-                throw TableError(name, valueLine(k, i),
-                                 pk + " cannot be normalized (values too small)");
         }
     }
     return t;
 }
 
+// Without leading and trailing spaces and tabs (the only white space of a table, design §2).
 inline std::string Trim(const std::string &s) {
-    const char *ws = " \t\r\n\f\v";
+    const char *ws = " \t";
     const std::size_t a = s.find_first_not_of(ws);
     if (a == std::string::npos)
         return std::string();
@@ -414,8 +509,9 @@ inline std::vector<std::string> SplitFields(const std::string &line) {
     return fields;
 }
 
-// One line without its terminator; "\n", "\r\n" and a lone "\r" all end a line (the same
-// lines Python's str.splitlines() sees in a table file).
+// One line without its terminator: "\n", "\r\n" and a lone "\r" end a line, and nothing else
+// does (design §2; the Python reader splits lines by the same rule, not by str.splitlines(),
+// which also splits at form feeds, NEL and U+2028).
 inline bool GetLine(std::istream &in, std::string &line) {
     line.clear();
     std::istream::int_type c = in.get();
@@ -441,6 +537,68 @@ inline std::string Lower(std::string s) {
     return s;
 }
 
+// `text` in single quotes for a message, bytes outside printable ASCII written as \xNN (a
+// message stays plain text whatever the file holds), at most 40 of them.
+inline std::string Quote(const std::string &text) {
+    std::string out = "'";
+    for (std::size_t i = 0; i < text.size() && i < 40; ++i) {
+        const unsigned char c = static_cast<unsigned char>(text[i]);
+        if (c >= 0x20 && c < 0x7F) {
+            out += static_cast<char>(c);
+        } else {
+            char hex[8];
+            std::snprintf(hex, sizeof hex, "\\x%02x", c);
+            out += hex;
+        }
+    }
+    return out + (text.size() > 40 ? "...'" : "'");
+}
+
+// The first control character of a line as its code point, or -1 if there is none: C0 other
+// than tab, DEL, and C1 (U+0080..U+009F, NEL among them, the UTF-8 bytes C2 80..C2 9F). Any
+// of them is an error in a table (design §2): none ends a line or counts as white space.
+inline long ControlCharacter(const std::string &line) {
+    for (std::size_t i = 0; i < line.size(); ++i) {
+        const unsigned char c = static_cast<unsigned char>(line[i]);
+        if ((c < 0x20 && c != '\t') || c == 0x7F)
+            return c;
+        if (c == 0xC2 && i + 1 < line.size()) {
+            const unsigned char d = static_cast<unsigned char>(line[i + 1]);
+            if (d >= 0x80 && d <= 0x9F)
+                return d;
+        }
+    }
+    return -1;
+}
+
+// Whether `low` (lower case, sign removed) is a number as design §2 writes one: ASCII digits
+// with an optional point and exponent (1, 1., .5, 1.5e-3), or nan, inf, infinity.
+inline bool IsNumberText(const std::string &low) {
+    if (low == "nan" || low == "inf" || low == "infinity")
+        return true;
+    std::size_t i = 0, digits = 0;
+    const auto isDigit = [&](std::size_t j) { return j < low.size() && low[j] >= '0' && low[j] <= '9'; };
+    while (isDigit(i))
+        ++i, ++digits;
+    if (i < low.size() && low[i] == '.') {
+        ++i;
+        while (isDigit(i))
+            ++i, ++digits;
+    }
+    if (digits == 0)
+        return false;
+    if (i < low.size() && low[i] == 'e') {
+        ++i;
+        if (i < low.size() && (low[i] == '+' || low[i] == '-'))
+            ++i;
+        if (!isDigit(i))
+            return false;
+        while (isDigit(i))
+            ++i;
+    }
+    return i == low.size();
+}
+
 // One number; NaN and infinities are returned as such (Build names them). Parsed with the
 // classic locale, so a renderer that switched the C locale still reads "0.5".
 inline double ParseNumber(const std::string &token, const std::string &name, int line) {
@@ -448,7 +606,9 @@ inline double ParseNumber(const std::string &token, const std::string &name, int
     const bool negative = !low.empty() && low[0] == '-';
     if (!low.empty() && (low[0] == '+' || low[0] == '-'))
         low.erase(0, 1);
-    if (low == "nan" || low.compare(0, 4, "nan(") == 0)
+    if (!IsNumberText(low))
+        throw TableError(name, line, "cannot parse number " + Quote(token));
+    if (low == "nan")
         return std::nan("");
     if (low == "inf" || low == "infinity")
         return negative ? -std::numeric_limits<double>::infinity()
@@ -464,7 +624,7 @@ inline double ParseNumber(const std::string &token, const std::string &name, int
         return v > 0 ? std::numeric_limits<double>::infinity()
                      : -std::numeric_limits<double>::infinity();
     if (token.empty() || is.fail() || (is >> std::ws, !is.eof()))
-        throw TableError(name, line, "cannot parse number '" + token + "'");
+        throw TableError(name, line, "cannot parse number " + Quote(token));
     return v;
 }
 
@@ -493,6 +653,13 @@ inline Table ParseTable(std::istream &in, const std::string &name) {
         ++lineNo;
         if (lineNo == 1 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0)
             raw.erase(0, 3);  // a UTF-8 byte-order mark
+        if (const long c = detail::ControlCharacter(raw); c >= 0) {
+            char code[8];
+            std::snprintf(code, sizeof code, "%04lX", c);
+            throw TableError(name, lineNo,
+                             std::string("control character U+") + code +
+                                 " is not allowed in a table (design §2)");
+        }
         const std::string line = detail::Trim(raw);
         if (line.empty() || line[0] == '#')
             continue;
@@ -562,17 +729,82 @@ inline Table ParseTable(std::istream &in, const std::string &name) {
     return detail::Build(std::move(grid), std::move(values), name, lines);
 }
 
+// The bytes of the table file `path`: it must be a regular file (not a directory, device,
+// FIFO or socket) of at most kMaxTableBytes (design §2.3). Throws TableError("PATH: reason").
+// On POSIX systems the file is opened without blocking (opening a FIFO to read would wait
+// for a writer) and the opened descriptor is checked, so a rename between the check and the
+// read cannot slip another file in; at most kMaxTableBytes + 1 bytes are ever read.
+inline std::string ReadTableFile(const std::string &path) {
+    const std::string tooLarge = "larger than 64 MiB, not a table file";
+    const std::string notRegular = "not a regular file (a device, FIFO or socket), not a table file";
+    std::string bytes;
+#if defined(WAVELENGTH_TABLE_POSIX)
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        const int err = errno;
+        if (err == ENOENT || err == ENOTDIR)
+            throw TableError(path, 0, "no such file");
+        if (err == EISDIR)
+            throw TableError(path, 0, "is a directory, not a table file");
+        throw TableError(path, 0, std::string("cannot read (") + std::strerror(err) + ")");
+    }
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    struct stat st;
+    if (::fstat(fd, &st) != 0)
+        throw TableError(path, 0, std::string("cannot read (") + std::strerror(errno) + ")");
+    if (S_ISDIR(st.st_mode))
+        throw TableError(path, 0, "is a directory, not a table file");
+    if (!S_ISREG(st.st_mode))
+        throw TableError(path, 0, notRegular);
+    if (static_cast<unsigned long long>(st.st_size) > kMaxTableBytes)
+        throw TableError(path, 0, tooLarge);
+    char chunk[1 << 16];
+    while (true) {
+        const ssize_t got = ::read(fd, chunk, sizeof chunk);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got < 0)
+            throw TableError(path, 0, std::string("cannot read (") + std::strerror(errno) + ")");
+        if (got == 0)
+            break;
+        bytes.append(chunk, static_cast<std::size_t>(got));
+        if (bytes.size() > kMaxTableBytes)  // the file grew while it was read
+            throw TableError(path, 0, tooLarge);
+    }
+#else
+    // Elsewhere: the same checks on the path, then the read.
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (!fs::exists(status))
+        throw TableError(path, 0, "no such file");
+    if (fs::is_directory(status))
+        throw TableError(path, 0, "is a directory, not a table file");
+    if (!fs::is_regular_file(status))
+        throw TableError(path, 0, notRegular);
+    if (fs::file_size(path, ec) > kMaxTableBytes)
+        throw TableError(path, 0, tooLarge);
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        throw TableError(path, 0, "cannot read (permission denied?)");
+    char chunk[1 << 16];
+    while (in.read(chunk, sizeof chunk), in.gcount() > 0) {
+        bytes.append(chunk, static_cast<std::size_t>(in.gcount()));
+        if (bytes.size() > kMaxTableBytes)
+            throw TableError(path, 0, tooLarge);
+    }
+    if (in.bad())
+        throw TableError(path, 0, "cannot read the table file");
+#endif
+    return bytes;
+}
+
 // A table from a file in either layout; errors name the file, the line and the reason.
 inline Table LoadTable(const std::string &path) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw TableError(path, 0, "is a directory, not a table file");
-    std::ifstream in(path);
-    if (!in)
-        throw TableError(path, 0,
-                         std::filesystem::exists(path, ec)
-                             ? "cannot open the table file (permission denied?)"
-                             : "no such file");
+    std::istringstream in(ReadTableFile(path));
     return ParseTable(in, path);
 }
 
@@ -645,6 +877,145 @@ inline std::vector<std::pair<double, double>> ZeroMixtureIntervals(const Table &
             out.back().second = t.grid[i + 1];
         else
             out.emplace_back(t.grid[i], t.grid[i + 1]);
+    }
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Coverage: emission a table never samples (design §1.5).
+// ---------------------------------------------------------------------------------------
+//
+// A path carries only wavelengths where the mixture density is positive; where a light emits
+// but the mixture is zero, that light is missing from the image however many samples are
+// taken. Two places can hide such emission: a gap inside the table's range (the defensive
+// mixture removes it) and the range outside [lambda_0, lambda_M] (only a wider grid helps).
+// The measure, the thresholds and the warnings live here so that every renderer built on
+// this header warns by one rule; wavelength_pdf.coverage is the optimizer's `show`.
+
+// Coverage is measured over the colour-matching functions' range [nm], by the midpoint rule
+// with this step: it sees a spectrum's 1 nm lines and the edges of 5 nm table segments.
+constexpr double kCoverageFirstNm = 360.0, kCoverageLastNm = 830.0, kCoverageStepNm = 0.1;
+// Emission outside the table's range below these fractions is not worth a warning: a table on
+// the default 380..780 nm grid misses about 1e-5 of the luminance of a lamp with a flat floor
+// (the CMFs are tiny at the ends); 1e-3 of a tristimulus value is about 0.1 CIEDE2000.
+constexpr double kOutsideLuminanceWarnFraction = 1e-4;
+constexpr double kOutsideTristimulusWarnFraction = 1e-3;
+
+// Where one emitter's light falls that a table does not sample. Fractions are of the
+// emitter's tristimulus integrals over kCoverageFirstNm..kCoverageLastNm.
+struct Coverage {
+    std::vector<std::pair<double, double>> gaps;     // zero-mixture stretches [nm] where it emits
+    double gapLuminanceFraction = 0;                 // of its luminance (Y) inside them
+    std::vector<std::pair<double, double>> outside;  // parts of the CMF range outside the grid
+    double outsideLuminanceFraction = 0;             // of its luminance (Y) there
+    double outsideTristimulusFraction = 0;           // the largest over X, Y and Z there
+};
+
+// The coverage of an emitter by a table whose grid spans [lo, hi] with zero-mixture intervals
+// `gaps` (ZeroMixtureIntervals). `emission(lambda)` is the emitter's spectrum and
+// `cmfs(lambda, xyz)` stores the colour-matching functions in xyz[3]: the renderer's own, so
+// that the header needs neither.
+template <typename Emission, typename Cmfs>
+Coverage MeasureCoverage(const std::vector<std::pair<double, double>> &gaps, double lo,
+                         double hi, const Emission &emission, const Cmfs &cmfs) {
+    Coverage c;
+    double total[3] = {0, 0, 0}, outside[3] = {0, 0, 0}, inGapsY = 0;
+    std::vector<bool> gapEmits(gaps.size(), false);
+    bool emitsBelow = false, emitsAbove = false;
+    const long n = std::lround((kCoverageLastNm - kCoverageFirstNm) / kCoverageStepNm);
+    for (long i = 0; i < n; ++i) {
+        const double lambda = kCoverageFirstNm + (double(i) + 0.5) * kCoverageStepNm;
+        const double e = emission(lambda);
+        if (!(e > 0))
+            continue;
+        double xyz[3];
+        cmfs(lambda, xyz);
+        const double w[3] = {e * xyz[0], e * xyz[1], e * xyz[2]};
+        for (int j = 0; j < 3; ++j)
+            total[j] += w[j];
+        if (lambda < lo || lambda > hi) {
+            (lambda < lo ? emitsBelow : emitsAbove) = true;
+            for (int j = 0; j < 3; ++j)
+                outside[j] += w[j];
+            continue;
+        }
+        for (std::size_t g = 0; g < gaps.size(); ++g)
+            if (lambda > gaps[g].first && lambda < gaps[g].second) {
+                gapEmits[g] = true;
+                inGapsY += w[1];
+            }
+    }
+    for (std::size_t g = 0; g < gaps.size(); ++g)
+        if (gapEmits[g])
+            c.gaps.push_back(gaps[g]);
+    if (emitsBelow)
+        c.outside.emplace_back(kCoverageFirstNm, lo);
+    if (emitsAbove)
+        c.outside.emplace_back(hi, kCoverageLastNm);
+    if (total[1] > 0) {
+        c.gapLuminanceFraction = inGapsY / total[1];
+        c.outsideLuminanceFraction = outside[1] / total[1];
+    }
+    for (int j = 0; j < 3; ++j)
+        if (total[j] > 0)
+            c.outsideTristimulusFraction = std::max(c.outsideTristimulusFraction, outside[j] / total[j]);
+    return c;
+}
+
+// The same for a table (its grid's range and its zero-mixture intervals).
+template <typename Emission, typename Cmfs>
+Coverage MeasureCoverage(const Table &t, const Emission &emission, const Cmfs &cmfs) {
+    return MeasureCoverage(ZeroMixtureIntervals(t), t.grid.front(), t.grid.back(), emission, cmfs);
+}
+
+// The warnings for one emitter (design §1.5), none when it is covered: emission in a gap
+// always, emission outside the range above the thresholds. `light` names it in the text
+// ("this light" after the caller's FILE:LINE:COL, else "a light"); `lo`, `hi` are the
+// table's range, `table` its description for the end of the text; `otherFix`, when not
+// empty, is offered after "extend the table's grid" (a renderer's own option).
+inline std::vector<std::string> CoverageWarnings(const Coverage &c, const std::string &light,
+                                                 double lo, double hi, const std::string &table,
+                                                 const std::string &otherFix = "") {
+    auto stream = [] {
+        std::ostringstream s;
+        s.imbue(std::locale::classic());
+        return s;
+    };
+    auto percent = [&](double f) {
+        std::ostringstream s = stream();
+        s << std::setprecision(3) << 100 * f << "%";
+        return s.str();
+    };
+    auto intervals = [&](const std::vector<std::pair<double, double>> &v) {
+        std::ostringstream s = stream();
+        for (std::size_t i = 0; i < v.size(); ++i) {
+            if (i)
+                s << (i + 1 == v.size() ? " and " : ", ");
+            s << "[" << v[i].first << ", " << v[i].second << "]";
+        }
+        s << " nm";
+        return s.str();
+    };
+    std::vector<std::string> out;
+    if (!c.gaps.empty()) {
+        std::ostringstream m = stream();
+        m << "the wavelength sampling density is zero on " << intervals(c.gaps) << ", where "
+          << light << " emits (" << percent(c.gapLuminanceFraction) << " of its luminance): "
+          << "paths never carry those wavelengths, so the image is biased; mix a uniform share "
+          << "into the table with --wavelength-pdf-defensive 0.01 [" << table << "]";
+        out.push_back(m.str());
+    }
+    if (!c.outside.empty() && (c.outsideLuminanceFraction > kOutsideLuminanceWarnFraction ||
+                               c.outsideTristimulusFraction > kOutsideTristimulusWarnFraction)) {
+        std::ostringstream m = stream();
+        m << light << " emits on " << intervals(c.outside) << ", outside the range of the "
+          << "wavelength table [" << lo << ", " << hi << "] nm, where paths never carry "
+          << "wavelengths: the image misses " << percent(c.outsideLuminanceFraction)
+          << " of its luminance (up to " << percent(c.outsideTristimulusFraction)
+          << " of X, Y or Z). --wavelength-pdf-defensive only covers the table's range; extend "
+          << "the table's grid to 360..830 nm" << (otherFix.empty() ? "" : ", or " + otherFix)
+          << " [" << table << "]";
+        out.push_back(m.str());
     }
     return out;
 }

@@ -11,6 +11,7 @@ add_executable(rgb2spec_opt
   ${_rgb2spec_src}/pbrt/pbrt.cpp
   ${_rgb2spec_src}/pbrt/util/cie_data.cpp
   ${_rgb2spec_src}/pbrt/util/spectrum.cpp
+  ${_rgb2spec_src}/pbrt/util/file.cpp
   ${_rgb2spec_src}/pbrt/util/color.cpp)
 target_include_directories(rgb2spec_opt PRIVATE ${_rgb2spec_src})
 target_link_libraries(rgb2spec_opt PRIVATE Threads::Threads)

@@ -97,6 +97,25 @@ def test_grid_has_the_lamps_and_scenes_it_promises():
         assert not g.jobs and len(g.skipped) == 3
 
 
+def test_summary_by_regime():
+    """The regime summary's medians come from the jobs' own ratios: a job whose table has a
+    quarter of the best simple sampler's error and one where it has the same."""
+    from wavelength_pdf.evaluation.benchmark import report
+
+    def row(job, name, de2):
+        return {"job": job, "sweep": "scenes", "kind": "fluorescent", "pixel_sampler": "sobol", "row": name,
+                "spp": 64, "de2": de2, "share_removed_de2": 0.5}
+
+    rows = [row("a/x/sobol", "optimized", 1.0), row("a/x/sobol", "uniform", 8.0), row("a/x/sobol", "spd", 4.0),
+            row("b/x/sobol", "optimized", 2.0), row("b/x/sobol", "uniform", 2.0), row("b/x/sobol", "spd", 3.0)]
+    table = report.summary_table(rows, 64)
+    line = next(x for x in table.splitlines() if x.startswith("| fluorescent, sobol"))
+    cells = [c.strip() for c in line.split("|")[1:-1]]
+    assert cells[1] == "2"                      # jobs
+    assert cells[2] == "2.50 (1.00-4.00)"       # best simple / table: 4 and 1
+    assert cells[-1] == "1 of 2"                # pays on one job
+
+
 # --- The small benchmark, end to end -----------------------------------------------------
 
 
@@ -155,8 +174,15 @@ def test_outputs_and_resume(small):
     for name in ("results.csv", "report.md", "error-vs-spp.png"):
         assert (out / name).is_file()
     text = (out / "report.md").read_text()
-    assert "## Checks" in text and "Regime map" in text
+    assert "## Checks" in text and "Regime map" in text and "## Summary by regime" in text
     again: list[str] = []
     rows2 = run_benchmark(G.small_grid(), out, workers=1, pbrt=pbrt, say=again.append)
     assert any("every render is done" in s for s in again), again
     assert [r["de2"] for r in rows2] == [r["de2"] for r in rows]
+    # A grid stopped early: --no-render scores the finished jobs and names the others.
+    victim = next((out / "jobs" / "two-lamp-box").rglob("renders/*.exr"))
+    victim.unlink()
+    partial: list[str] = []
+    rows3 = run_benchmark(G.small_grid(), out, pbrt=pbrt, render=False, say=partial.append)
+    assert {r["job"] for r in rows3} == {r["job"] for r in rows} - {"two-lamp-box/own/sobol"}
+    assert any("not finished" in s and "two-lamp-box/own/sobol" in s for s in partial), partial

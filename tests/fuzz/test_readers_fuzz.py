@@ -9,12 +9,14 @@ never an accepted result that breaks a promise.
 The inputs are built from the formats' own pieces (headers, numbers at the extremes of
 float64, separators, comments, directives) mixed with arbitrary text, so that most of them
 get past the first line. The default profile is derandomized and small (part of the test
-suite: 40 examples per reader); ``HYPOTHESIS_PROFILE=fuzz`` runs 20000.
+suite: 40 examples per reader); ``HYPOTHESIS_PROFILE=fuzz`` runs 20000. The table texts also
+go to the header (through ``pbrt --wavelength-pdf``), which must agree with the Python reader.
 """
 from __future__ import annotations
 
 import os
 import re
+import subprocess
 import tempfile
 from pathlib import Path
 
@@ -258,6 +260,35 @@ def test_scene_spectra_reads_or_raises_spectrum_error(workdir, text):
         path.unlink()
     for s in spectra:
         check_spectrum(s)
+
+
+#: A scene for pbrt to parse without rendering (--emission-spectrum): it reads the table first.
+_ONE_LAMP = 'WorldBegin\nLightSource "point" "spectrum I" [ 400 1 700 1 ]\n'
+
+
+@given(TABLE_TEXT)
+def test_python_reader_and_header_agree_on_mangled_tables(pbrt, workdir, text):
+    """Design §2.1a, §2.3: the Python reader and the header (as pbrt --wavelength-pdf reads a
+    table) accept the same texts, and refuse the others at the same line for the same reason
+    (a quoted token may be written differently: Python's repr, the header's \\xNN)."""
+    path = write(text, ".csv", workdir)
+    scene = workdir / "one-lamp.pbrt"
+    scene.write_text(_ONE_LAMP)
+    try:
+        try:
+            read_table(path)
+            python = "accepted"
+        except TableError as e:
+            python = str(e)
+        run = subprocess.run([str(pbrt), "--quiet", "--wavelength-pdf", str(path),
+                              "--emission-spectrum", str(workdir / "e.spd"), str(scene)],
+                             capture_output=True, text=True, errors="replace", timeout=60)
+    finally:
+        path.unlink()
+    header = "accepted" if run.returncode == 0 else run.stderr.strip().removeprefix("pbrt: ")
+    assert run.returncode in (0, 1), run.stderr
+    cut = " cannot parse number "
+    assert python.split(cut)[0] == header.split(cut)[0], (text, python, header)
 
 
 def test_the_strategies_reach_past_the_first_line(workdir):

@@ -1,17 +1,16 @@
-"""The plugin works from an installed package, without the checkout: a wheel of the project,
-installed into a folder of its own, registers the texture and renders a scene with a table
-written elsewhere, from a working directory outside the repository."""
+"""The plugin works from an installed package, without the checkout: the project's wheel
+(scripts/build_wheel.sh), installed into a fresh virtual environment, registers the texture and
+renders a scene with a table written elsewhere, from a working directory outside the
+repository."""
 from __future__ import annotations
 
-import os
 import subprocess
-import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 
 from mitsuba_helpers import REPO, VECTORS
+from wheel_helpers import build_wheel, clean_env, fresh_venv
 
 pytestmark = pytest.mark.slow
 
@@ -33,25 +32,20 @@ print("ok", wavelength_pdf.__file__)
 
 
 def test_wheel_installed_elsewhere_renders(tmp_path):
-    wheels = tmp_path / "wheels"
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-                    "-w", str(wheels), str(REPO)], check=True, timeout=300, cwd=tmp_path)
-    (wheel,) = wheels.glob("wavelength_pdf-*.whl")
+    wheel = build_wheel(tmp_path / "wheels")
     names = zipfile.ZipFile(wheel).namelist()
     assert "wavelength_pdf/mitsuba/texture.py" in names and "wavelength_pdf/mitsuba/sampler.py" in names
-    site = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(site), str(wheel)],
-                   check=True, timeout=300)
+    venv = tmp_path / "venv"
+    bin_dir = fresh_venv(venv, wheel)
     table = tmp_path / "elsewhere" / "table.csv"
     table.parent.mkdir()
     table.write_text((VECTORS / "vectors-table.csv").read_text())
     work = tmp_path / "work"
     work.mkdir()
-    env = {**os.environ, "PYTHONPATH": str(site)}  # ahead of the checkout's editable install
-    out = subprocess.run([sys.executable, "-c", SCRIPT, str(site), str(table)], cwd=work, env=env,
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run([str(bin_dir / "python"), "-c", SCRIPT, str(venv), str(table)], cwd=work,
+                         env=clean_env(bin_dir), capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-3000:]
-    assert out.stdout.startswith("ok " + str(site))
+    assert out.stdout.startswith("ok " + str(venv))
 
 
 def test_plugin_reads_nothing_from_the_checkout():

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from input_files import EDGE_TABLES, edge_table_cases
 from mitsuba_helpers import SCENE, variant
 from wavelength_pdf import sampling
 from wavelength_pdf.mitsuba import register
@@ -82,6 +83,31 @@ def test_bad_table_fails_scene_loading_with_file_line_reason(name, tmp_path):
         sensor_with_table(mi, tmp_path / "missing.csv")
     with pytest.raises(Exception, match="needs a 'filename'"):
         mi.load_dict({"type": "perspective", "srf": {"type": "wavelength_table"}})
+
+
+@pytest.mark.parametrize("name", ["scalar_spectral", "llvm_ad_spectral"])
+def test_edge_tables_load_as_every_reader_reads_them(name):
+    """The shared edge cases (tests/data/tables/edge): the plugin refuses what pbrt and the
+    header refuse, at the same line, and samples what they read; a table of subnormal
+    densities (5e-324 everywhere) is uniform sampling, not "zero everywhere"."""
+    mi, _ = variant(name)
+    u = np.array([0.0, 0.1, 0.5, 0.9, 1.0 - 2**-24], dtype=np.float32).astype(np.float64)
+    for file, nodes, line, reason in edge_table_cases():
+        path = EDGE_TABLES / file
+        if nodes is None:
+            with pytest.raises(Exception) as e:
+                sensor_with_table(mi, path)
+            assert f"{path}:{line}: " in str(e.value) and reason in str(e.value), (file, str(e.value))
+            continue
+        wl, w = draw(mi, sensor_with_table(mi, path), u)
+        t = read_table(path)
+        lam = np.asarray(sampling.sample_four(t.grid, t.pdfs, u)).T
+        np.testing.assert_allclose(wl, lam, rtol=2e-7, err_msg=file)
+        np.testing.assert_allclose(w, 1.0 / np.asarray(sampling.mixture_pdf(t.grid, t.pdfs, lam)),
+                                   rtol=2e-6, err_msg=file)
+    wl, w = draw(mi, sensor_with_table(mi, EDGE_TABLES / "denormal.csv"), u)
+    t = read_table(EDGE_TABLES / "denormal.csv")
+    np.testing.assert_allclose(w, t.grid[-1] - t.grid[0], rtol=1e-6)  # 1 / the uniform density
 
 
 def test_xml_scene_renders_with_the_table(tmp_path, vector_table):

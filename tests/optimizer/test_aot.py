@@ -118,3 +118,84 @@ def test_no_compilation_starts_that_would_end_past_the_deadline(on_disk, tmp_pat
         np.testing.assert_array_equal(np.asarray(f(x)), 3.0 * np.arange(5.0) + 1.0)
         with pytest.raises(aot.CompileWouldOverrun):
             f(jnp.arange(6.0))  # another shape: another compilation
+
+
+# --- what the cache folder may hold (design §7) -------------------------------------------
+
+class _Planted:
+    """A pickle that, loaded, creates the file ``marker``: what an attacker would plant."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        import pathlib
+
+        return (pathlib.Path.touch, (pathlib.Path(self.marker),))
+
+
+@float64
+def test_planted_file_is_never_unpickled(cache_dir, tmp_path):
+    """A file planted where an executable is expected ran its command when it was loaded."""
+    import pickle
+
+    x = jnp.linspace(0.0, 1.0, 8)
+    arr = {"w": jnp.ones(8)}
+    want = np.asarray(_fresh()(x, arr, 1.0, "cumsum"))
+    (path,) = cache_dir.glob("f-*.pkl")
+    marker = tmp_path / "planted-code-ran"
+    path.write_bytes(pickle.dumps(_Planted(marker)))
+    assert path.stat().st_mode & 0o077 == 0  # a private file of this user, as the real one
+    np.testing.assert_array_equal(np.asarray(_fresh()(x, arr, 1.0, "cumsum")), want)
+    assert not marker.exists(), "the planted pickle was loaded"
+    # A copy of a genuine entry under another entry's name is refused too (the name is signed).
+    genuine = path.read_bytes()
+    assert genuine.startswith(aot._MAGIC)
+    other = cache_dir / "f-0000000000000000000000000000000000000000.pkl"
+    other.write_bytes(genuine)
+    other.chmod(0o600)
+    with pytest.raises(ValueError, match="not written by this package"):
+        aot._unsealed(other, other.name)
+
+
+@pytest.fixture
+def restore_compilation_cache():
+    from wavelength_pdf import objective
+
+    saved = (objective._cache_dir, aot._dir, jax.config.jax_compilation_cache_dir)
+    objective._cache_dir = None
+    yield objective
+    objective._cache_dir, aot._dir = saved[0], saved[1]
+    jax.config.update("jax_compilation_cache_dir", saved[2])
+
+
+def test_cache_folder_others_may_write_is_not_used(tmp_path, monkeypatch, restore_compilation_cache):
+    objective = restore_compilation_cache
+    folder = tmp_path / "shared-cache"
+    folder.mkdir()
+    folder.chmod(0o777)
+    monkeypatch.setenv("WAVELENGTH_PDF_JAX_CACHE", str(folder))
+    with pytest.warns(RuntimeWarning, match="others may write in it"):
+        assert objective.enable_compilation_cache() is None
+    assert aot._dir is None
+    assert jax.config.jax_compilation_cache_dir != str(folder)
+    assert list(folder.iterdir()) == []
+    assert objective.enable_compilation_cache() is None  # one warning: decided once
+
+
+def test_cache_folder_of_another_user_is_not_used(tmp_path, monkeypatch, restore_compilation_cache):
+    import os
+
+    if os.geteuid() != 0:
+        pytest.skip("needs root to give a folder to another user")
+    objective = restore_compilation_cache
+    folder = tmp_path / "their-cache"
+    folder.mkdir(mode=0o700)
+    os.chown(folder, 65534, 65534)
+    monkeypatch.setenv("WAVELENGTH_PDF_JAX_CACHE", str(folder))
+    with pytest.warns(RuntimeWarning, match="belongs to another user"):
+        assert objective.enable_compilation_cache() is None
+    assert aot._dir is None and list(folder.iterdir()) == []
+    # aot refuses such a folder by itself too.
+    aot.enable(folder)
+    assert aot._dir is None

@@ -6,6 +6,8 @@ compared with the module's exact piecewise integration.
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -137,3 +139,56 @@ def test_show_is_silent_for_a_covering_table(tmp_path, capsys):
     spd = _write_spd(tmp_path / "flat.spd", 400, 700)
     assert cli.main(["show", str(table), "--spectrum", spd]) == 0
     assert "warning" not in capsys.readouterr().err
+
+
+# --- light at or beyond the table's ends: refused by optimize (design §3.3) -----------------
+
+def _write_points(path, points) -> str:
+    path.write_text("".join(f"{l!r} {v!r}\n" for l, v in points))
+    return str(path)
+
+
+def _gaussian(centre: float, sigma: float = 10.0):
+    return [(centre + d / 10.0, float(np.exp(-0.5 * (d / 10.0 / sigma) ** 2))) for d in range(-1000, 1001)]
+
+
+@pytest.mark.parametrize("centre, where, suggestion", [
+    (780.0, "on [780, 830] nm", "--range 380 830 --grid-step 5"),
+    (380.0, "on [360, 380] nm", "--range 360 780 --grid-step 5"),
+])
+def test_optimize_refuses_a_lamp_peaked_at_the_table_end(tmp_path, capsys, centre, where, suggestion):
+    """optimize accepted such a lamp silently, while show then reported that renders miss
+    a third of its luminance: now it is refused before any work, with the fix."""
+    spd = _write_points(tmp_path / "peak.spd", _gaussian(centre))
+    out = tmp_path / "t.csv"
+    assert cli.main(["optimize", spd, "-o", str(out), "--max-evals", "1", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "outside the table's range [380, 780] nm" in err and where in err, err
+    assert suggestion in err and "of its luminance" in err, err
+    assert not out.exists()
+
+
+def test_optimize_refuses_a_narrow_line_at_the_end_without_a_nan(tmp_path, capsys):
+    """A 0.01 nm line at exactly 780 nm was refused as 'relative bias nan' (its Z is 0)."""
+    spd = _write_points(tmp_path / "line.spd", [(779.99, 0.0), (780.0, 1.0), (780.01, 0.0)])
+    out = tmp_path / "t.csv"
+    assert cli.main(["optimize", spd, "-o", str(out), "--max-evals", "1", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "emits 50% of its luminance" in err and "on [780, 780.01] nm" in err, err
+    assert "--range 380 785" in err, err
+    assert not re.search(r"\bnan\b", err, re.IGNORECASE), err
+    assert not out.exists()
+
+
+def test_light_outside_below_the_refusal_is_a_warning():
+    """Between the reporting thresholds of design §1.5 and 1 %: the warning show prints."""
+    from wavelength_pdf.coverage import REFUSE_OUTSIDE_FRACTION, check_range
+
+    sp = make_spectrum("bump", "test", [365, 370, 375, 400, 700],
+                       [0.0, 20.0, 0.0, 1.0, 1.0])  # a UV bump beside a flat band
+    cov = coverage(np.array([380.0, 780.0]), np.ones((4, 2)), sp)
+    assert cov.outside_matters
+    assert max(cov.outside_luminance_fraction, cov.outside_tristimulus_fraction) < REFUSE_OUTSIDE_FRACTION
+    (w,) = check_range(sp, 380.0, 780.0)
+    assert "outside the table's range [380, 780] nm" in w
+    assert check_range(_flat(400, 700), 380.0, 780.0) == []

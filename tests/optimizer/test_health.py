@@ -1,5 +1,7 @@
 """Estimator health: exact bias, per-channel std, and the acceptance rule."""
 
+import re
+
 import jax
 import numpy as np
 import pytest
@@ -111,3 +113,28 @@ def test_exact_second_moment_matches_fine_quadrature(problem):
 def test_uniform_health(problem):
     hu = health.uniform_health(problem)
     assert hu.bias < 1e-12 and np.all(np.isfinite(hu.std))
+
+
+def test_a_channel_whose_integral_is_zero_is_unbiased_not_nan():
+    """A red line (z-bar is 0 above ~650 nm) has Z = 0: its relative bias and std were 0 / 0,
+    NaN, and every table for it was refused as 'relative bias nan'."""
+    red = Spectrum("red line", "test:red", np.array([699.0, 700.0, 701.0]), np.array([0.0, 1.0, 0.0]))
+    p = objective.make_problem(red, GRID)
+    assert p.c[2] == 0.0
+    P0 = init.equal_mass_partition(p)
+    h = health.health(p, P0)
+    assert np.all(np.isfinite(h.bias_xyz)) and np.all(np.isfinite(h.std)), (h.bias_xyz, h.std)
+    assert h.bias_xyz[2] == 0.0 and h.std[2] == 0.0
+    assert h.bias < 1e-9
+    assert health.rejection(h, h) == ""
+    u = health.uniform_health(p)
+    assert np.all(np.isfinite(u.std)) and u.std[2] == 0.0
+
+
+def test_rejection_never_writes_nan():
+    h = health.Health(bias=float("nan"), bias_xyz=np.full(3, np.nan), std=np.zeros(3),
+                      missing_mass=np.zeros(3))
+    reason = health.rejection(h)
+    assert reason and not re.search(r"\bnan\b", reason, re.IGNORECASE), reason
+    ok = health.Health(bias=0.0, bias_xyz=np.zeros(3), std=np.zeros(3), missing_mass=np.zeros(3))
+    assert not re.search(r"\bnan\b", health.rejection(ok, None, J=float("nan"), J_uniform=1.0), re.IGNORECASE)

@@ -65,10 +65,15 @@ def _exe(path: Path) -> Path:
 
 
 def test_renderer_lookup_order(tmp_path, monkeypatch):
-    """--pbrt, then $WAVELENGTH_PDF_PBRT, then the checkout's build/pbrt, then PATH."""
+    """--pbrt, then $WAVELENGTH_PDF_PBRT, then the checkout's build/pbrt, then the wheel's
+    own (_bin/pbrt), then PATH."""
     a, b, c = (_exe(tmp_path / n) for n in ("a", "b", "pbrt"))
+    (tmp_path / "_bin").mkdir()
+    bundled = _exe(tmp_path / "_bin" / "pbrt")
     (tmp_path / "bin").mkdir()
     on_path = _exe(tmp_path / "bin" / "pbrt")
+    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
+    monkeypatch.setattr(render, "BUNDLED_PBRT", bundled)
     monkeypatch.setenv(render.PBRT_ENV, str(b))
     assert render.find_pbrt(a) == a
     assert render.find_pbrt() == b
@@ -76,19 +81,30 @@ def test_renderer_lookup_order(tmp_path, monkeypatch):
     monkeypatch.setattr(render, "CHECKOUT_PBRT", c)
     assert render.find_pbrt() == c
     monkeypatch.setattr(render, "CHECKOUT_PBRT", tmp_path / "missing")
-    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
+    assert render.find_pbrt() == bundled
+    monkeypatch.setattr(render, "BUNDLED_PBRT", tmp_path / "_bin" / "missing")
     assert render.find_pbrt() == on_path
 
 
-def test_renderer_not_found_lists_where_it_looked(tmp_path, monkeypatch):
+def test_the_bundled_renderer_is_inside_the_package():
+    import wavelength_pdf
+
+    assert render.BUNDLED_PBRT == Path(wavelength_pdf.__file__).resolve().parent / "_bin" / "pbrt"
+
+
+def test_renderer_not_found_lists_where_it_looked_and_how_to_get_one(tmp_path, monkeypatch):
     monkeypatch.setenv(render.PBRT_ENV, str(tmp_path / "nope"))
     monkeypatch.setattr(render, "CHECKOUT_PBRT", tmp_path / "build" / "pbrt")
+    monkeypatch.setattr(render, "BUNDLED_PBRT", tmp_path / "_bin" / "pbrt")
     monkeypatch.setenv("PATH", str(tmp_path))
     with pytest.raises(render.RendererNotFound) as e:
         render.find_pbrt()
     msg = str(e.value)
-    assert str(tmp_path / "nope") in msg and str(tmp_path / "build" / "pbrt") in msg
+    for place in ("nope", "build/pbrt", "_bin/pbrt"):
+        assert str(tmp_path / place) in msg, place
     assert "PATH" in msg and "--pbrt" in msg
+    for way in ("scripts/setup.sh", "cmake --install", "build_wheel.sh --with-pbrt"):
+        assert way in msg, way
     with pytest.raises(render.RendererNotFound, match="not an executable"):
         render.find_pbrt(tmp_path / "nope")
 
@@ -102,7 +118,7 @@ def test_ipopt_without_cyipopt_says_how_to_install(monkeypatch):
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda name, *a: None if name == "cyipopt" else real(name, *a))
-    with pytest.raises(ValueError, match=r"wavelength-pdf\[ipopt\]"):
+    with pytest.raises(ValueError, match=r"pip install cyipopt"):
         optimize.optimize_spectrum(load_spectrum("cie:D65"), solver="ipopt")
 
 

@@ -182,3 +182,14 @@ def test_bad_reflectances_on_the_command_line_exit_2(tmp_path, capsys):
     assert cli.main(["optimize", "cie:FL2", "--reflectances", "scene", "-o", str(out), "--quiet"]) == 2
     assert "--reflectances scene needs a pbrt-v4 scene" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_reflectance_fifo_and_device_are_refused_without_reading(tmp_path):
+    """Regular files only (design §3.4): a FIFO blocked, /dev/zero was read without end."""
+    from input_files import link_to_dev_zero, make_fifo, read_bounded
+
+    for path in (make_fifo(tmp_path, "fifo.csv"), link_to_dev_zero(tmp_path, "zero.csv")):
+        status, out = read_bounded("wavelength_pdf.reflectances:read_reflectances", path)
+        assert status == 3, out
+        assert out == (f"SpectrumError: {path}: not a regular file (a device, FIFO or socket), "
+                       "not a reflectance file"), out

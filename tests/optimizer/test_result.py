@@ -59,7 +59,7 @@ def test_rule_rejects_a_table_worse_than_uniform(fl2):
     assert not r.accepted and r.reason == reason
     assert "accepted: False" in r.header_lines()
     assert health_mod.rejection(h, h, J=1.0, J_uniform=1.0) == "", "equal to uniform is fine"
-    assert "J is nan" in health_mod.rejection(h, h, J=float("nan"), J_uniform=1.0)
+    assert "J is not a number" in health_mod.rejection(h, h, J=float("nan"), J_uniform=1.0)
 
 
 def test_rule_rejects_bias_and_worse_std(fl2):

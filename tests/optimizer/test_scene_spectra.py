@@ -236,3 +236,19 @@ def test_emitter_needs_its_type(tmp_path):
     path.write_text('WorldBegin\nLightSource [ 400 1 500 1 ]\n')
     with pytest.raises(SpectrumError, match=r"s.pbrt:2: LightSource needs a quoted type"):
         load_spectra(str(path))
+
+
+def test_scene_or_include_that_is_a_fifo_or_device_is_refused(tmp_path):
+    """Regular files only, as the renderer reads scenes (design §5.5): a FIFO named as a scene
+    or an Include blocked for ever, /dev/zero was read without end."""
+    from input_files import link_to_dev_zero, make_fifo, read_bounded
+
+    fifo = make_fifo(tmp_path, "fifo.pbrt")
+    zero = link_to_dev_zero(tmp_path, "zero.pbrt")
+    including = tmp_path / "including.pbrt"
+    including.write_text('WorldBegin\nInclude "zero.pbrt"\n')
+    for path, where in ((fifo, f"{fifo}: {fifo}"), (zero, f"{zero}: {zero}"),
+                        (including, f"{including}:2: {zero}")):
+        status, out = read_bounded("wavelength_pdf.scene_spectra:scan_scene", path)
+        assert status == 3, out
+        assert out.startswith(f"SpectrumError: {where}: not a regular file"), out

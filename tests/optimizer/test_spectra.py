@@ -267,3 +267,28 @@ def test_reader_registry_dispatches_by_suffix(tmp_path, monkeypatch):
     (tmp_path / "b.xyz").write_text("")
     with pytest.raises(sp_mod.SpectrumError, match=r"unknown spectrum format '\.xyz'.*\.two"):
         sp_mod.load_spectra(str(tmp_path / "b.xyz"))
+
+
+# --- what is not a spectrum file (design §3.3: regular files of at most 64 MiB) --------
+
+from input_files import link_to_dev_zero, make_fifo, read_bounded  # noqa: E402
+
+
+@pytest.mark.parametrize("suffix", [".spd", ".csv"])
+def test_fifo_and_device_are_refused_without_reading(tmp_path, suffix):
+    """A FIFO named as a spectrum blocked for ever; /dev/zero was read until a MemoryError."""
+    for path in (make_fifo(tmp_path, f"fifo{suffix}"), link_to_dev_zero(tmp_path, f"zero{suffix}")):
+        status, out = read_bounded("wavelength_pdf.spectra:load_spectrum", path)
+        assert status == 3, out
+        assert out == (f"SpectrumError: {path}: not a regular file (a device, FIFO or socket), "
+                       "not a spectrum file"), out
+
+
+def test_spectrum_larger_than_64_mib_is_refused(tmp_path):
+    path = tmp_path / "big.spd"
+    with open(path, "w") as fh:
+        fh.write("400 1\n500 1\n600 1\n")
+        fh.write(("#" + "x" * 1023 + "\n") * (64 * 1024))  # valid, padded with comments
+    with pytest.raises(SpectrumError) as e:
+        load_spectrum(str(path))
+    assert str(e.value) == f"{path}: larger than 64 MiB, not a spectrum file"

@@ -12,16 +12,11 @@ import time
 from pathlib import Path
 
 import pytest
+from input_files import sphere_scene
 
 #: A scene that takes well over the time the checks below allow, were it rendered: an
 #: error that comes "before rendering" must come in far less time than this scene takes.
-SLOW_SCENE = """\
-Film "rgb" "integer xresolution" [ 512 ] "integer yresolution" [ 512 ]
-Sampler "independent" "integer pixelsamples" [ 4096 ]
-WorldBegin
-LightSource "infinite"
-Shape "sphere"
-"""
+SLOW_SCENE = sphere_scene(512, 4096)
 
 
 def run(pbrt, *args: str) -> subprocess.CompletedProcess:
@@ -90,3 +85,23 @@ def test_film_filename_is_checked_at_its_statement(pbrt, tmp_path):
 def test_directory_as_scene_is_named_as_such(pbrt, tmp_path):
     r = fails_fast(pbrt, "--outfile", str(tmp_path / "x.exr"), str(tmp_path))
     assert f'"{tmp_path}": is a directory, not a scene file' in r.stderr, r.stderr
+
+
+def test_fifo_or_device_as_spectrum_or_include_is_refused_at_once(pbrt, tmp_path):
+    """A FIFO named as a scene's .spd spectrum or Include held pbrt for ever, /dev/zero was
+    read without end: regular files only (design §3.3, §5.5)."""
+    import os
+
+    os.mkfifo(tmp_path / "fifo.spd")
+    (tmp_path / "zero.pbrt").symlink_to("/dev/zero")
+    for line, kind in (('LightSource "infinite" "spectrum L" "fifo.spd"', "spectrum"),
+                       ('Include "zero.pbrt"', "scene")):
+        scene = tmp_path / "s.pbrt"
+        scene.write_text(SLOW_SCENE + line + "\n")
+        try:
+            r = fails_fast(pbrt, "--outfile", str(tmp_path / "x.exr"), str(scene))
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"pbrt still reading after 120 s: {line}")
+        assert f"{scene}:6:" in r.stderr, r.stderr
+        assert f"not a regular file (a device, FIFO or socket), not a {kind} file" in r.stderr, r.stderr
+        assert not (tmp_path / "x.exr").exists()

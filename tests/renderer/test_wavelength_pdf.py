@@ -33,6 +33,7 @@ from wavelength_pdf.exr import read_rgb
 
 REPO = Path(__file__).resolve().parents[2]
 from repo_paths import SHARED  # noqa: E402  (read-only; may be absent)
+from input_files import EDGE_TABLES, edge_table_cases, make_fifo  # noqa: E402
 SCENE = REPO / "scenes" / "cornell-box" / "scene.pbrt"
 OPTIMIZED = REPO / "tests" / "data" / "tables" / "tri-band-fluorescent-optimized.csv"
 REFERENCE_DIR = SHARED / "tables" / "reference-4x81"
@@ -57,7 +58,7 @@ def scene(tmp_path_factory) -> Path:
     """The Cornell box with the sobol sampler, the lamp's spectrum path made absolute."""
     text = SCENE.read_text()
     text, n_sampler = re.subn(r'Sampler\s+"independent"', 'Sampler "sobol"', text)
-    spd = '"../../spectra/tri-band-fluorescent.spd"'
+    spd = '"tri-band-fluorescent.spd"'  # beside the scene (a copy of spectra/'s)
     assert n_sampler == 1 and spd in text, "scenes/cornell-box/scene.pbrt changed: update this test"
     text = text.replace(spd, f'"{REPO / "spectra" / "tri-band-fluorescent.spd"}"')
     out = tmp_path_factory.mktemp("cornell") / "scene.pbrt"
@@ -274,30 +275,53 @@ def test_a_narrow_table_warns_about_emission_outside_its_range(pbrt, scene, tmp_
 # (b) Bad tables
 # ---------------------------------------------------------------------------------------------
 
-HEAD = "# a comment\nlambda_nm,pdf0,pdf1,pdf2,pdf3\n380,1,1,1,1\n"
-BAD_TABLES = {
-    # design §2 class: (file text, line named, reason fragment)
-    "nan": (HEAD + "385,1,nan,1,1\n", 4, "pdf1 is NaN"),
-    "infinity": (HEAD + "385,1,1,inf,1\n", 4, "pdf2 is infinite"),
-    "negative": (HEAD + "385,1,1,1,-0.5\n", 4, "pdf3 is negative"),
-    "zero-everywhere": ("lambda_nm,pdf0,pdf1,pdf2,pdf3\n380,0,1,1,1\n385,0,1,1,1\n", 2, "pdf0 is zero everywhere"),
-    "not-increasing": (HEAD + "390,1,1,1,1\n390,1,1,1,1\n", 5, "not strictly increasing"),
-    "columns": (HEAD + "385,1,1,1,1,1\n", 4, "6 columns, expected 5"),
-    "one-node": (HEAD, 3, "at least 2 grid nodes"),
-    "4x81-ragged": ("\n".join([",".join(["1"] * 81)] * 3 + [",".join(["1"] * 80)]) + "\n", 4, "80 densities, expected 81"),
-}
+#: One file per reject class of design §2.3 from the shared edge cases (their line and reason
+#: in tests/data/tables/edge/expected.csv, which every table reader's test reads).
+BAD_TABLES = ["nan.csv", "inf.csv", "negative.csv", "zero.csv", "repeated.csv", "six-columns.csv",
+              "one-node.csv", "wide-ragged-short.csv"]
 
 
-@pytest.mark.parametrize("kind", sorted(BAD_TABLES))
+@pytest.mark.parametrize("kind", BAD_TABLES)
 def test_bad_table_stops_pbrt_before_rendering(pbrt, scene, tmp_path, kind):
-    text, line, reason = BAD_TABLES[kind]
-    table = tmp_path / f"{kind}.csv"
-    table.write_text(text)
+    line, reason = next((line, reason) for name, nodes, line, reason in edge_table_cases()
+                        if name == kind)
+    table = EDGE_TABLES / kind
     out = tmp_path / "never.exr"
     run = run_pbrt(pbrt, scene, out, "--wavelength-pdf", str(table), spp=64)
     assert run.returncode == 1, run.stderr
     assert f"pbrt: {table}:{line}: " in run.stderr and reason in run.stderr, run.stderr
     assert not out.exists(), "an image was written"
+
+
+@pytest.mark.parametrize("name, nodes, line, reason", edge_table_cases(),
+                         ids=[c[0] for c in edge_table_cases()])
+def test_edge_tables_as_pbrt_reads_them(pbrt, scene, tmp_path, name, nodes, line, reason):
+    """The shared edge cases (tests/data/tables/edge, read alike by the Python reader and the
+    header): pbrt refuses what they refuse, at the same line, and reads what they read."""
+    table = EDGE_TABLES / name
+    # --emission-spectrum parses the scene and renders nothing: the table is read first.
+    proc = subprocess.run([str(pbrt), "--quiet", "--wavelength-pdf", str(table),
+                           "--emission-spectrum", str(tmp_path / "e.spd"), str(scene)],
+                          capture_output=True, text=True, timeout=120)
+    if nodes is not None:
+        assert proc.returncode == 0, proc.stderr
+        return
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stderr.startswith(f"pbrt: {table}:{line}: ") and reason in proc.stderr, proc.stderr
+
+
+def test_fifo_or_device_as_table_stops_pbrt_at_once(pbrt, scene, tmp_path):
+    """A FIFO held pbrt for ever, /dev/zero was read without end (design §2.3: regular files
+    of at most 64 MiB)."""
+    for table in (make_fifo(tmp_path, "fifo.csv"), Path("/dev/zero")):
+        out = tmp_path / "never.exr"
+        try:
+            run = run_pbrt(pbrt, scene, out, "--wavelength-pdf", str(table))
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"pbrt still reading {table} after 120 s")
+        assert run.returncode == 1, run.stderr
+        assert f"pbrt: {table}: not a regular file" in run.stderr, run.stderr
+        assert not out.exists()
 
 
 def test_missing_table_stops_pbrt(pbrt, scene, tmp_path):

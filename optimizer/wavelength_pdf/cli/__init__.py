@@ -17,6 +17,12 @@ show TABLE
     estimator health (:mod:`.show`).
 evaluate, grid, published, demo
     The evaluation (design §6; :mod:`wavelength_pdf.evaluation.commands`).
+mitsuba SCENE.xml
+    Render a Mitsuba 3 XML scene with the ``wavelength_table`` plugin registered (Mitsuba's
+    own command cannot load it; :mod:`.mitsuba`).
+cache info|clear|warm
+    The optimizer's compile cache: its place and size, emptied, or filled ahead of time
+    (:mod:`.cache`, design §7).
 
 Bad input (a malformed or missing spectrum, scene or table) prints ``wavelength-pdf:
 <file:line: reason>`` and exits with status 2; a result that is not accepted is not written
@@ -149,7 +155,7 @@ def positive_int(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``wavelength-pdf`` (optimize, batch, show, evaluate, grid, demo)."""
-    from wavelength_pdf.cli import baseline, batch, optimize, show
+    from wavelength_pdf.cli import baseline, batch, cache, mitsuba, optimize, show
 
     names = solver_names()
     p = argparse.ArgumentParser(
@@ -160,7 +166,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "Optimization of Wavelength Sampling Distributions for Spectral "
                     "Rendering\", TU Delft; the contracts are in docs/design.md).",
         epilog="solvers: " + (", ".join(names) if names else "(registry unavailable)") +
-               ". Bad input exits with status 2, a result that is not accepted with 1.",
+               ". Bad input exits with status 2, a result that is not accepted with 1. "
+               + cache.help_text(),
     )
     p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND",
@@ -169,6 +176,8 @@ def build_parser() -> argparse.ArgumentParser:
     baseline.add_parser(sub)
     batch.add_parser(sub, names)
     show.add_parser(sub)
+    cache.add_parser(sub)
+    mitsuba.add_parser(sub)
 
     # The evaluation (design §6): evaluate, grid, published and demo (the README's main job).
     from wavelength_pdf.evaluation.commands import add_subcommands

@@ -113,5 +113,5 @@ def add_parser(sub) -> None:
                         "design §5.6)")
     b.add_argument("--pbrt", metavar="PATH", default=None,
                    help="with --whole-scene: the renderer (default: $WAVELENGTH_PDF_PBRT, else "
-                        "the checkout's build/pbrt, else pbrt on PATH)")
+                        "the checkout's build/pbrt, else the wheel's own, else pbrt on PATH)")
     b.set_defaults(func=cmd_baseline)

@@ -10,6 +10,7 @@ from typing import Sequence
 
 from wavelength_pdf.cli import (EXIT_NOT_ACCEPTED, PROG, SPECTRUM_HELP, BadInput, Formatter,
                                 check_solver, range_args, solver_args)
+from wavelength_pdf.coverage import check_range
 from wavelength_pdf.produce import make_grid, optimize_one, safe_name, summary_line
 from wavelength_pdf.spectra import Spectrum, SpectrumError, load_spectra
 
@@ -120,6 +121,11 @@ def cmd_optimize(args: argparse.Namespace) -> int:
             spectra = load_spectra(args.spectrum, lo=lo, hi=hi)
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+    # Light outside the table's range (design §3.3): refused above 1 %, warned about above
+    # the reporting thresholds, for every spectrum before any of them is optimized.
+    for sp in spectra:
+        for w in check_range(sp, lo, hi):
+            print(f"{PROG}: warning: {w}", file=sys.stderr)
     reflectances = surface_colours(args.reflectances, args.spectrum, lo, hi, args.pbrt)
     paths = output_paths(spectra, args.output)
     several = len(spectra) > 1
@@ -143,7 +149,9 @@ def cmd_optimize(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub, names: list[str]) -> None:
-    o = sub.add_parser("optimize", formatter_class=Formatter,
+    from wavelength_pdf.cli.cache import help_text
+
+    o = sub.add_parser("optimize", formatter_class=Formatter, epilog=help_text(),
                        help="optimize the wavelength table of a spectrum",
                        description="Optimize four wavelength densities for SPECTRUM and "
                                    "write them as a table (design §2) with a comment header. "
@@ -178,7 +186,7 @@ def add_parser(sub, names: list[str]) -> None:
                         "reflectance)")
     o.add_argument("--pbrt", metavar="PATH", default=None,
                    help="with --whole-scene or --reflectances scene: the renderer (default: $WAVELENGTH_PDF_PBRT, "
-                        "else the checkout's build/pbrt, else pbrt on PATH)")
+                        "else the checkout's build/pbrt, else the wheel's own, else pbrt on PATH)")
     solver_args(o, names)
     range_args(o)
     o.add_argument("--colour-bar", "--color-bar", dest="colour_bar", metavar="PNG",

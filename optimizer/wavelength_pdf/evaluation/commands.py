@@ -79,7 +79,7 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
     p.add_argument("--nthreads", type=int, default=None, help="renderer threads (default: all cores)")
     p.add_argument("--pbrt", type=Path, default=None,
                    help=f"renderer binary (default: ${PBRT_ENV}, else the checkout's build/pbrt, "
-                        "else pbrt on PATH)")
+                        "else the wheel's own, else pbrt on PATH)")
     p.add_argument("--reflectances", default=None, metavar="SET",
                    help="optimize the tables for coloured surfaces (design §4.5): 'scene' (the "
                         "scene's materials), 'colorchecker' or a reflectance CSV (design §3.4)")
@@ -88,7 +88,8 @@ def _common(p: argparse.ArgumentParser, spp=DEFAULT_SPP, truth_spp=8192, resolut
 def _renderer(p: argparse.ArgumentParser) -> None:
     p.add_argument("--renderer", choices=("pbrt", "mitsuba"), default="pbrt",
                    help="pbrt (build/pbrt, a .pbrt scene) or mitsuba (Mitsuba 3, llvm_ad_spectral, a .xml "
-                        "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default)")
+                        "scene such as scenes/cornell-box/scene.xml; visible = Mitsuba's default; "
+                        "needs no pbrt)")
 
 
 def _cluster(p: argparse.ArgumentParser) -> None:
@@ -141,8 +142,9 @@ def add_subcommands(sub) -> None:
                                      "the sun; the staircase (D65, 2641); the glass of water (D65, A, 2482). The "
                                      "report shows the published ratio beside the measured one. Scenes and "
                                      "spectra come from --shared.")
-    pub.add_argument("--shared", type=Path, default=REPO.parent / "shared",
-                     help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the repository)")
+    pub.add_argument("--shared", type=Path, default=default_shared(),
+                     help="folder with scenes/ and spectra/lspdd/ (default: ../shared beside the "
+                          "repository in a checkout; ./shared when the package is installed)")
     pub.add_argument("-o", "--outdir", type=Path, default=OUT / "published",
                      help="output folder (default out/published)")
     pub.add_argument("--only", nargs="+", default=None, metavar="SCENE/SPECTRUM",
@@ -195,10 +197,20 @@ PUBLISHED = (
 
 def _config(args) -> Config:
     resolution = args.resolution or args.resolution_scale or args.default_resolution
+    if getattr(args, "renderer", "pbrt") == "mitsuba":
+        # Mitsuba-only users need no pbrt (design §6.4): nothing looks for it.
+        if args.pbrt is not None:
+            raise ValueError("--pbrt is not used with --renderer mitsuba")
+        if args.reflectances is not None:
+            raise ValueError("--reflectances needs the pbrt renderer (the scene's materials come "
+                             "from pbrt); with --renderer mitsuba, leave it out")
+        pbrt = None
+    else:
+        pbrt = find_pbrt(args.pbrt)
     config = Config(spp=args.spp, methods=args.methods, truth_spp=args.truth_spp,
                     truth_method=args.truth_method, truth_chunks=args.truth_chunks, resolution=resolution,
                     seed=args.seed, seeds=args.seeds, nthreads=args.nthreads,
-                    lo=args.range[0], hi=args.range[1], pbrt=find_pbrt(args.pbrt),
+                    lo=args.range[0], hi=args.range[1], pbrt=pbrt,
                     reflectances=args.reflectances)
     check_config(config)
     if getattr(args, "workers", None) is not None and args.workers < 1:
@@ -228,10 +240,10 @@ def job_outputs(ev, spectrum, outdir: Path) -> None:
 def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table: Path | None,
             bar=None, renderer: str = "pbrt"):
     """One evaluation with its plots: error against spp and time, error maps, colour bar."""
-    spectrum, reflectances = job_inputs(scene, spectrum_spec, config)
     whole = spectrum_spec == WHOLE_SCENE
-    if renderer == "mitsuba" and (whole or reflectances is not None):
+    if renderer == "mitsuba" and (whole or config.reflectances is not None):
         raise ValueError(f"'{WHOLE_SCENE}' and --reflectances need the pbrt renderer")
+    spectrum, reflectances = job_inputs(scene, spectrum_spec, config)
 
     def say(msg: str) -> None:
         if bar is not None:
@@ -254,8 +266,15 @@ def run_one(scene: Path, spectrum_spec: str, outdir: Path, config: Config, table
             bar.set_postfix_str(f"{outdir.name}: optimizing the table, {min(step, total)}/{total} "
                                 f"evaluations, J {J:.4g}", refresh=True)
 
+    if bar is not None and table is None:  # the table's optimization starts by compiling
+        bar.set_postfix_str(f"{outdir.name}: optimizing the table: {progress.preparing_message()}",
+                            refresh=True)
     if renderer == "mitsuba":
-        from wavelength_pdf.evaluation import render_mitsuba
+        try:
+            from wavelength_pdf.evaluation import render_mitsuba
+        except ImportError as e:
+            raise ValueError(f"--renderer mitsuba needs Mitsuba 3 (the mitsuba extra): pip install "
+                             f"mitsuba ({e})") from None
         ev = render_mitsuba.evaluate(scene, spectrum, outdir, config, table=table, progress=say,
                                      optimizer_progress=optimizing)
     else:
@@ -370,8 +389,19 @@ def cmd_grid(args) -> int:
     return 0
 
 
+def default_shared() -> Path:
+    """Where ``published`` looks for the shared material when ``--shared`` is not given: ../shared
+    beside the checkout, or ``shared`` in the current folder for an installed package (whose
+    ../shared would be beside site-packages)."""
+    return REPO.parent / "shared" if data.in_checkout() else Path.cwd() / "shared"
+
+
 def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Path, str]]:
     """The (scene, spectrum) pairs of the published comparison, as paths under ``shared``."""
+    if not Path(shared).is_dir():
+        raise FileNotFoundError(2, "no such folder: the published comparison needs the shared "
+                                   "material (scenes/ and spectra/lspdd/); give its place with "
+                                   "--shared DIR", str(shared))
     jobs = []
     for scene, spec, *_ in PUBLISHED:
         if only and f"{scene}/{spec}" not in only:
@@ -380,7 +410,9 @@ def published_jobs(shared: Path, only: list[str] | None = None) -> list[tuple[Pa
         spectrum = spec if ":" in spec else str(shared / "spectra" / "lspdd" / f"{spec}.csv")
         for f in (path, Path(spectrum) if ":" not in spectrum else None):
             if f is not None and not f.is_file():
-                raise FileNotFoundError(2, "missing (the published comparison needs ../shared)", str(f))
+                raise FileNotFoundError(2, f"missing: the published comparison needs the shared "
+                                           f"material; is {shared} the right folder? (give it with "
+                                           "--shared DIR)", str(f))
         jobs.append((path, spectrum))
     if not jobs:
         known = ", ".join(f"{s}/{p}" for s, p, *_ in PUBLISHED)

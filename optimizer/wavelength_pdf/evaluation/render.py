@@ -5,6 +5,7 @@ loading included, the same for every sampler) is what the error-against-time plo
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -22,8 +23,15 @@ from wavelength_pdf.data import CHECKOUT, in_checkout
 REPO = CHECKOUT
 #: The checkout's own build of the renderer (scripts/setup.sh).
 CHECKOUT_PBRT = CHECKOUT / "build" / "pbrt"
+#: The renderer inside an installed wheel built with ``scripts/build_wheel.sh --with-pbrt``.
+BUNDLED_PBRT = Path(__file__).resolve().parents[1] / "_bin" / "pbrt"
 #: Environment variable naming the renderer binary.
 PBRT_ENV = "WAVELENGTH_PDF_PBRT"
+#: The ways to get a renderer, for the message when none is found.
+HOW_TO_GET_PBRT = (
+    "give --pbrt PATH or set $" + PBRT_ENV + "; or, in a checkout, build it (bash scripts/setup.sh) and "
+    "put it on PATH (cmake --install build --prefix ~/.local) or inside the wheel "
+    "(bash scripts/build_wheel.sh --with-pbrt build/pbrt)")
 
 
 class RendererNotFound(FileNotFoundError):
@@ -32,7 +40,8 @@ class RendererNotFound(FileNotFoundError):
 
 def find_pbrt(explicit: str | os.PathLike | None = None) -> Path:
     """The renderer binary: ``explicit`` (``--pbrt``), else ``$WAVELENGTH_PDF_PBRT``, else the
-    checkout's ``build/pbrt``, else ``pbrt`` on ``PATH``.
+    checkout's ``build/pbrt``, else the installed wheel's own (``wavelength_pdf/_bin/pbrt``),
+    else ``pbrt`` on ``PATH``.
 
     Raises
     ------
@@ -60,12 +69,15 @@ def find_pbrt(explicit: str | os.PathLike | None = None) -> Path:
         if usable(CHECKOUT_PBRT):
             return CHECKOUT_PBRT
         looked.append(f"{CHECKOUT_PBRT} (not built: bash scripts/setup.sh)")
+    if usable(BUNDLED_PBRT):
+        return BUNDLED_PBRT
+    looked.append(f"{BUNDLED_PBRT} (this wheel was built without --with-pbrt)")
     on_path = shutil.which("pbrt")
     if on_path:
         return Path(on_path)
     looked.append("pbrt on PATH (none)")
-    raise RendererNotFound("no renderer found; looked at: " + "; ".join(looked) +
-                           ". Give --pbrt PATH or set " + PBRT_ENV)
+    raise RendererNotFound("no renderer found; looked at: " + "; ".join(looked) + ". To get one: "
+                           + HOW_TO_GET_PBRT)
 
 
 class RenderError(RuntimeError):
@@ -105,8 +117,28 @@ def file_digest(*paths: Path, extra: str = "") -> str:
     """A short content hash of files and a string (cache keys)."""
     h = hashlib.sha256(extra.encode())
     for p in paths:
-        h.update(Path(p).read_bytes())
+        h.update(_content_hash(Path(p)))
     return h.hexdigest()[:16]
+
+
+#: Content hashes of large files (the renderer) are cached by (path, inode, size, times): a
+#: grid asks for the renderer's hash once per render, and reading a binary of tens of MB ten
+#: thousand times took longer than the renders. Small files (scenes, tables) are hashed every
+#: time, since one rewritten within the file system's timestamp tick would keep a stale hash.
+_CACHED_FROM = 1 << 20
+
+
+def _content_hash(path: Path) -> bytes:
+    st = path.stat()
+    if st.st_size < _CACHED_FROM:
+        return hashlib.sha256(path.read_bytes()).digest()
+    return _large_file_hash(str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+
+
+@functools.lru_cache(maxsize=16)
+def _large_file_hash(path: str, *identity: int) -> bytes:
+    """The hash of a large file, cached by its path and ``identity`` (inode, size, times)."""
+    return hashlib.sha256(Path(path).read_bytes()).digest()
 
 
 def _run(cmd: list[str], on_percent: Callable[[int], None] | None) -> tuple[int, str]:

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
+from wavelength_pdf.emitters import emission_parameter
 from wavelength_pdf.pbrt_syntax import Token, split_params, statements, tokenize
 from wavelength_pdf.spectra import Spectrum, SpectrumError
 
 #: Parameters whose string value names a file, relative to the file that names it.
 _FILE_PARAMS = {"filename", "mapname", "lensfile", "bsdffile"}
-_INTENSITY_LIGHTS = {"point", "spot", "goniometric", "projection"}
 #: pbrt-v4's film size when the scene gives none.
 DEFAULT_FILM = (1280, 720)
 #: Directives with a parameter list, and how many quoted arguments come before it.
@@ -140,7 +140,7 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
         split_params(st, _WITH_PARAMS[d])
         type_ = st.args[0].text if st.args and st.args[0].kind == "str" else ""
         emitting = spectrum is not None and d in ("LightSource", "AreaLightSource")
-        pname = "I" if d == "LightSource" and type_ in _INTENSITY_LIGHTS else "L"
+        pname = emission_parameter(d, type_)
         replaced = False
         cutting = cut and spectrum is None and d in ("LightSource", "AreaLightSource")
         if cutting:

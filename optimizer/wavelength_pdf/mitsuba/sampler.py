@@ -37,6 +37,7 @@ import math
 import drjit as dr
 import numpy as np
 
+from wavelength_pdf.model import normalized_with_cdf
 from wavelength_pdf.table import N_DENSITIES, Table, TableError, normalize
 
 
@@ -51,14 +52,13 @@ def defensive_mixture(table: Table, share: float) -> Table:
 
 
 def _normalized_with_cdf(grid: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """Node values, CDF at the nodes (F[0] = 0, F[M] = 1) and the last segment with mass,
-    by the formulas of ``wavelength_pdf.sampling``."""
-    seg = 0.5 * (p[1:] + p[:-1]) * np.diff(grid)
-    cum = np.concatenate([[0.0], np.cumsum(seg)])
-    total = cum[-1]
+    """Node values, CDF at the nodes (F[0] = 0, F[M] = 1) and the last segment with mass:
+    ``model.normalized_with_cdf`` in numpy, the formulas of ``wavelength_pdf.sampling``. (The
+    table is prepared here, outside Dr.Jit; only the sampling runs in Dr.Jit types.)"""
+    pn, cdf = normalized_with_cdf(grid, p)
     has_mass = (p[1:] + p[:-1]) > 0
     last = int(len(has_mass) - 1 - np.argmax(has_mass[::-1]))
-    return p / total, np.minimum(cum / total, 1.0), last
+    return pn, cdf, last
 
 
 class TableSampler:

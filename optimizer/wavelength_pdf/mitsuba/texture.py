@@ -15,6 +15,12 @@ Properties: ``filename`` (the table, read and validated by ``wavelength_pdf.tabl
 table fails scene loading with ``FILE:LINE: reason``) or ``table`` (the name of a table built
 in this process by ``wavelength_pdf.mitsuba.emission_srf``: emission sampling, design §1.7),
 and ``defensive`` (float in [0, 1], default 0: the uniform share of design §1).
+
+Cost: in the llvm and cuda variants ``sample_spectrum`` runs once, while Dr.Jit traces the
+render kernel, and costs nothing per sample. In the scalar variants Mitsuba calls it through
+Python once per sample (a few microseconds of interpreter work against a path that costs
+about as much in C++): renders take 5-7 times as long as with Mitsuba's default sampling. It
+cannot be cut from Python; use ``llvm_ad_spectral`` (same images; it warns once, below).
 """
 from __future__ import annotations
 
@@ -36,10 +42,28 @@ def _resolve(filename: str) -> Path:
     path = Path(filename)
     if not path.is_absolute():
         try:
-            path = Path(str(mitsuba.Thread.thread().file_resolver().resolve(filename)))
+            resolver = (mitsuba.file_resolver() if hasattr(mitsuba, "file_resolver")
+                        else mitsuba.Thread.thread().file_resolver())  # before Mitsuba 3.6
+            path = Path(str(resolver.resolve(filename)))
         except Exception:  # no resolver in this thread: relative to the working directory
             pass
     return path
+
+
+#: The scalar variants' cost, said once per process.
+SCALAR_COST = ("wavelength_table in a scalar variant: Mitsuba calls this Python plugin once per "
+               "sample, so renders take 5-7 times as long as with Mitsuba's default sampling; "
+               "in llvm_ad_spectral (or cuda_ad_spectral) it runs compiled, at no cost per sample")
+_warned_scalar = False
+
+
+def _warn_scalar_cost() -> None:
+    global _warned_scalar
+    if not _warned_scalar:
+        _warned_scalar = True
+        import warnings
+
+        warnings.warn(SCALAR_COST, RuntimeWarning, stacklevel=3)
 
 
 def texture_class(m):
@@ -65,6 +89,8 @@ def texture_class(m):
                 self.filename = str(_resolve(str(props["filename"])))
                 table = read_table(self.filename)
             self.sampler = TableSampler(table, m, self.defensive)
+            if not self.sampler.jit:
+                _warn_scalar_cost()
 
         def sample_spectrum(self, si, sample, active=True):
             u = m.Float64(sample[0])  # lane 0 of math::sample_shifted(u) is u itself

@@ -122,6 +122,23 @@ void Camera::CheckRays(Vector2f filterRadius, const FileLoc &loc) const {
             }
 }
 
+SquareMatrix4 Camera::NDCFromWorld() const {
+    SquareMatrix4 screenFromCamera;  // identity
+    if (type == Type::Perspective) {
+        // pbrt-v4's Perspective(fov, n = 0.01, f = 1000): x/z and y/z over tan(fov / 2), and
+        // z' = f (z - n) / ((f - n) z) after the divide by w = z.
+        const double n = 1e-2, f = 1000, inv = 1 / std::tan(Radians(fov) / 2);
+        const Float m[16] = {Float(inv), 0, 0, 0,
+                             0, Float(inv), 0, 0,
+                             0, 0, Float(f / (f - n)), Float(-f * n / (f - n)),
+                             0, 0, 1, 0};
+        screenFromCamera = SquareMatrix4::FromRowMajor(m);
+    }
+    // (Orthographic(0, 1) is the identity.)
+    const Float half[16] = {0.5f, 0, 0, 0.5f, 0, 0.5f, 0, 0.5f, 0, 0, 0.5f, 0.5f, 0, 0, 0, 1};
+    return SquareMatrix4::FromRowMajor(half) * screenFromCamera * CameraFromWorld();
+}
+
 std::string Camera::Description() const {
     std::string s = type == Type::Perspective ? "perspective fov " + std::to_string(fov) : "orthographic";
     if (lensRadius > 0) s += " lens radius " + std::to_string(lensRadius);

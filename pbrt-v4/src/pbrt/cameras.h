@@ -40,6 +40,15 @@ class Camera {
     Ray GenerateRay(Point2f pFilm, Point2f uLens) const;
 
     const Transform &WorldFromCamera() const { return worldFromCamera; }
+    // The matrices pbrt-v4 records in its EXR images: camera from world ("worldToCamera"),
+    // and NDC from world ("worldToNDC"): Translate(1/2, 1/2, 1/2) Scale(1/2, 1/2, 1/2)
+    // screenFromCamera cameraFromWorld, screenFromCamera being pbrt-v4's projection
+    // (perspective: x and y divided by z tan(fov/2), z mapped from [0.01, 1000] to [0, 1];
+    // orthographic: z from [0, 1]). A world point p lands on screen point (2 ndc - 1) (x, y),
+    // i.e. raster x = (2 ndc.x - 1 - screen x0) / (x1 - x0) * width, and raster y likewise
+    // from the top (ndc.y grows upwards).
+    SquareMatrix4 CameraFromWorld() const { return worldFromCamera.InverseMatrix(); }
+    SquareMatrix4 NDCFromWorld() const;
     Float ExposureTime() const { return shutterClose - shutterOpen; }
     std::string Description() const;
     // Throws PbrtError(loc) unless every camera ray is one the ray tracer can trace: film

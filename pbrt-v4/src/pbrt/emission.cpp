@@ -3,6 +3,7 @@
 #include <pbrt/lights.h>
 #include <pbrt/materials.h>
 #include <pbrt/scene.h>
+#include <pbrt/util/output_path.h>
 #include <pbrt/util/spectrum.h>
 
 #include <pbrt/util/cie_data.h>
@@ -156,17 +157,12 @@ EmissionTable SceneEmissionTable(const Scene &scene, const std::string &weight) 
 // name, renamed into place only when every write succeeded: never a partial file.
 template <typename Body>
 static void WriteAtomically(const std::string &path, Body body) {
-    std::string tmp = path + ".tmp" + std::to_string(getpid());
-    FILE *f = std::fopen(tmp.c_str(), "w");
+    TemporaryOutput tmp(path);  // removed on an error or a SIGTERM (util/output_path.h)
+    FILE *f = std::fopen(tmp.Path().c_str(), "w");
     if (!f) throw PbrtError("\"" + path + "\": cannot be written");
     bool ok = body(f);
     ok = (std::fclose(f) == 0) && ok;
-    std::error_code ec;
-    if (ok) std::filesystem::rename(tmp, path, ec);
-    if (!ok || ec) {
-        std::filesystem::remove(tmp, ec);
-        throw PbrtError("\"" + path + "\": writing failed");
-    }
+    if (!ok || !tmp.Commit()) throw PbrtError("\"" + path + "\": writing failed");
 }
 
 void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {

@@ -6,9 +6,12 @@
 // (0 only), sensor ("cie1931" only), maxcomponentvalue (infinite; applied to the output
 // RGB), savefp16 (ignored: EXR is always 32-bit float), diagonal (only for realistic cameras).
 // The colour space is the one in effect at the Film directive (ColorSpace directive).
-// "gbuffer" and "spectral" films are rendered as "rgb" with a warning.
+// The "spectral" film (nbuckets 16, lambdamin 360, lambdamax 830) writes the same RGB plus the
+// spectral radiance in nbuckets equal bands as EXR channels "S0.<centre>nm" (OpenEXR's
+// spectral layout, pbrt-v4's names and units); "gbuffer" is refused at its line.
 #pragma once
 
+#include <pbrt/options.h>
 #include <pbrt/sensor.h>
 #include <pbrt/util/color.h>
 #include <pbrt/util/image.h>
@@ -34,12 +37,17 @@ struct FilmSettings {
     Float iso = 100;
     Float maxComponentValue = std::numeric_limits<Float>::infinity();
     const RGBColorSpace *colorSpace = nullptr;
+    // "spectral" films: buckets of spectral radiance over [lambdaMin, lambdaMax] (0: "rgb").
+    int nBuckets = 0;
+    Float lambdaMin = 360, lambdaMax = 830;
 
-    // From a Film directive. resolutionOverride (if x > 0) replaces the resolution, and
-    // resolutionScale scales it; the crop window stays the same fraction of the image.
+    // From a Film directive and the command line: opts.resolution (if x > 0) replaces the
+    // resolution, opts.resolutionScale scales it (the crop window stays the same fraction of
+    // the image), opts.quick divides it by 4, and opts.cropWindow / opts.pixelBounds replace
+    // the film's crop.
     static FilmSettings Create(const std::string &type, const ParameterDictionary &params,
-                               const RGBColorSpace *colorSpace, Point2i resolutionOverride,
-                               Float resolutionScale, const FileLoc &loc);
+                               const RGBColorSpace *colorSpace, const RenderOptions &opts,
+                               const FileLoc &loc);
 };
 
 class RGBFilm {
@@ -64,7 +72,15 @@ class RGBFilm {
         px.rgb[2] += double(weight) * rgb.b;
         px.weight += weight;
     }
-    // The final image (width x height of the pixel bounds, 3 channels).
+    bool IsSpectral() const { return settings.nBuckets > 0; }
+    // Spectral films: adds weight times one path's spectral radiance, per bucket the unbiased
+    // estimate of its mean over the bucket, (1/n) sum_i [lambda_i in bucket] L_i / pdf_i /
+    // width, for any wavelength sampler (pbrt-v4 averages L in buckets, which holds for its
+    // uniform sampling only). The weights are the ones AddSample gets.
+    void AddSpectralSample(Point2i pPixel, const SampledSpectrum &L, const SampledWavelengths &lambda,
+                           Float weight);
+    // The final image (width x height of the pixel bounds, 3 channels; spectral films add
+    // their buckets as named channels).
     Image GetImage() const;
     // Writes the image with the metadata plus the colour space's "chromaticities" and its
     // name ("colorSpace") in an EXR file.
@@ -82,6 +98,7 @@ class RGBFilm {
     FilmSettings settings;
     FilmSensor sensor;
     std::vector<Pixel> pixels;
+    std::vector<double> buckets;  // spectral films: nBuckets per pixel, weighted sums
 };
 
 }  // namespace pbrt

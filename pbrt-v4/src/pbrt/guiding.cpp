@@ -452,7 +452,9 @@ WavelengthGuide BuildWavelengthGuide(const Scene &scene, const GuidingSettings &
         const int maxDepth = scene.integrator.maxDepth;
         const FilmSensor &sensor = scene.film->Sensor();
         tbb::parallel_for(tbb::blocked_range<size_t>(0, nTiles, 1), [&](const tbb::blocked_range<size_t> &r) {
-            Sampler sampler(SamplerType::Sobol, g.prepassPathsPerTile, kGuidingPrepassSeed);
+            // Independent numbers keyed by (tile, path): a low-discrepancy sampler here is set up
+            // for a 1 x 1 image and would repeat its points across tiles.
+            Sampler sampler(SamplerType::Independent, g.prepassPathsPerTile, kGuidingPrepassSeed);
             LightContributions byLight;
             byLight.groupOfLight = &g.kinds.kindOfLight;
             byLight.byGroup.assign(nKinds, SampledSpectrum(0));
@@ -463,7 +465,7 @@ WavelengthGuide BuildWavelengthGuide(const Scene &scene, const GuidingSettings &
                 const Float y1 = std::min(y0 + Float(g.tile), Float(g.bounds.pMax.y));
                 std::vector<double> &acc = g.tileLuminance[t];
                 for (int i = 0; i < g.prepassPathsPerTile; ++i) {
-                    sampler.StartPixelSample(Point2i(tx, ty), i);
+                    sampler.StartPixelSample(Point2i{tx, ty}, i);
                     Point2f u = sampler.GetPixel2D();
                     Point2f pFilm(x0 + u.x * (x1 - x0), y0 + u.y * (y1 - y0));
                     SampledWavelengths lambda = scene.wavelengths.Sample(sampler.Get1D());
@@ -551,7 +553,7 @@ WavelengthGuide BuildWavelengthGuide(const Scene &scene, const GuidingSettings &
                             std::to_string(g.tables.size()) + " tables this render needs is there:" + list +
                             "\n(write the mixtures with --wavelength-guiding-spectra DIR and the same scene, "
                             "--spp, resolution and --guiding-* options, then optimize them: "
-                            "wavelength-pdf batch DIR -o TABLES --range 360 830; or use wavelength-pdf guide)");
+                            "wavelength-pdf batch DIR -o TABLES --range 360 830)");
         }
         for (const std::string &m : missing)
             Warning("wavelength guiding: no optimized table " + m + "; that table is the stratified one");
@@ -650,7 +652,7 @@ void AddGuidingMetadata(ImageMetadata &m, const WavelengthGuide &g) {
     std::vector<float> index(size_t(g.bounds.Area()));
     size_t i = 0;
     for (int y = g.bounds.pMin.y; y < g.bounds.pMax.y; ++y)
-        for (int x = g.bounds.pMin.x; x < g.bounds.pMax.x; ++x) index[i++] = float(g.IndexAt(Point2i(x, y)));
+        for (int x = g.bounds.pMin.x; x < g.bounds.pMax.x; ++x) index[i++] = float(g.IndexAt(Point2i{x, y}));
     m.channels["wavelengthTable.index"] = std::move(index);
 }
 

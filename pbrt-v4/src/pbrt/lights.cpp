@@ -100,6 +100,12 @@ std::string IndexedPiecewiseLinearSpectrum::ToString() const {
     return "[ IndexedPiecewiseLinearSpectrum " + std::to_string(lambdas.size()) + " samples ]";
 }
 
+const char *EmissionParameterName(const std::string &directive, const std::string &type) {
+    const bool pointLike =
+        type == "point" || type == "spot" || type == "goniometric" || type == "projection";
+    return directive == "LightSource" && pointLike ? "I" : "L";
+}
+
 SpectrumHandle FastLookup(SpectrumHandle s) {
     if (auto pl = std::dynamic_pointer_cast<const PiecewiseLinearSpectrum>(s))
         return std::make_shared<IndexedPiecewiseLinearSpectrum>(*pl);

@@ -157,6 +157,13 @@ class IndexedPiecewiseLinearSpectrum : public Spectrum {
 };
 SpectrumHandle FastLookup(SpectrumHandle s);
 
+// The name of the parameter that carries the spectrum of a `directive` ("LightSource" or
+// "AreaLightSource") of type `type`, as pbrt-v4's light constructors read it (design §5.4):
+// "I" (intensity) for the point-like lights point, spot, goniometric and projection, "L"
+// (radiance) for every other light. tests/data/emitter-parameters.csv pins this and the
+// Python reader's wavelength_pdf.emitters.emission_parameter alike.
+const char *EmissionParameterName(const std::string &directive, const std::string &type);
+
 // Picks lights for next-event estimation with probability proportional to Power().
 class LightSampler {
   public:

@@ -11,6 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <string>
+
 using namespace pbrt;
 using namespace pbrt::testing_util;
 
@@ -258,4 +261,31 @@ AttributeBegin Translate 0 0 6 Shape "sphere" "float radius" [0.5] AttributeEnd
     Ray both(Point3f(0, 0, -1), Vector3f(0, 0, 10), 1);  // through the light and the second sphere
     EXPECT_TRUE(scene->accel->Occluded(both, id));
     EXPECT_TRUE(scene->accel->Occluded(both, id + 1000));
+}
+
+// Which parameter carries a light's spectrum: the table the Python scene reader's test reads
+// too (tests/data/emitter-parameters.csv), so the two implementations of the rule agree.
+TEST(Lights, EmissionParameterAsTheSharedTableSays) {
+    std::ifstream in(PBRT_EMITTER_PARAMETERS_CSV);
+    ASSERT_TRUE(in) << PBRT_EMITTER_PARAMETERS_CSV << " is missing";
+    std::string line;
+    bool header = false;
+    int rows = 0, intensity = 0;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        if (!header) {
+            header = true;  // directive,type,parameter
+            continue;
+        }
+        const size_t a = line.find(','), b = line.find(',', a + 1);
+        const std::string directive = line.substr(0, a), type = line.substr(a + 1, b - a - 1);
+        const std::string parameter = line.substr(b + 1);
+        EXPECT_EQ(EmissionParameterName(directive, type), parameter) << line;
+        ++rows;
+        intensity += parameter == "I";
+    }
+    EXPECT_GE(rows, 7);
+    EXPECT_EQ(intensity, 4);
+    // An area light is never an intensity light, whatever its type is called.
+    EXPECT_STREQ(EmissionParameterName("AreaLightSource", "point"), "L");
 }

@@ -5,6 +5,7 @@
 #include <pbrt/guiding.h>
 #include <pbrt/util/vecmath.h>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -17,6 +18,26 @@ struct RenderOptions {
     int nThreads = 0;                     // --nthreads: 0 = all cores
     std::optional<uint64_t> seed;         // --seed: overrides the scene's seeds
     bool quiet = false;                   // --quiet: no progress bar or summary
+    // --quick: a quarter of the film's resolution each way and one sample per pixel (pbrt-v4).
+    bool quick = false;
+    // --cropwindow x0,x1,y0,y1 (fractions of the image) or --pixelbounds x0,x1,y0,y1 (pixels;
+    // --pixel x,y is one pixel): render that part only, replacing the film's own crop
+    // (pbrt-v4's meaning; the EXR's data window says where it lies in the frame).
+    std::optional<std::array<Float, 4>> cropWindow;
+    std::optional<std::array<int, 4>> pixelBounds;
+    bool stats = false;                   // --stats: print the render's statistics at the end
+    // --mse-reference-image FILE: print the mean squared error of the image against FILE (same
+    // size); --mse-reference-out FILE: write "spp MSE" lines, one per pass of samples.
+    std::string mseReference, mseReferenceOut;
+    // --write-partial-images: write the image after every pass of samples (passes of 1, 1, 2,
+    // 4, ..., 64 samples per pixel, as pbrt-v4 renders).
+    bool writePartialImages = false;
+    // --log-level verbose|error|fatal: verbose adds what was loaded and how, fatal drops
+    // warnings; --log-file FILE: messages go there (and the level becomes verbose).
+    std::string logLevel = "error", logFile;
+    // --disable-pixel-jitter, --disable-wavelength-jitter: as the scene's Option statements of
+    // those names (pixel centres; the same wavelengths for every path).
+    bool disablePixelJitter = false, disableWavelengthJitter = false;
     // Wavelength sampling (design §5): "visible" (pbrt-v4's default), "uniform" over
     // [lambdaMin, lambdaMax] (stratified), or "emission" (a table built from the scene's
     // emitted power times emissionWeight, design §1.7; emission.h).

@@ -2,6 +2,8 @@
 // Written from the pbrt-v4 file-format documentation (pbrt.org/fileformat-v4).
 #include <pbrt/parser.h>
 
+#include <pbrt/util/file.h>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -45,7 +47,8 @@ bool HasSuffix(const std::string &s, const char *suffix) {
 }
 
 // The whole file in memory (the tokenizer then works on views into it). `from` is where the
-// file was asked for (an Include), or null for a file named on the command line.
+// file was asked for (an Include), or null for a file named on the command line. Regular
+// files only (a device or FIFO is refused before a byte is read, design §5.5).
 std::string ReadSceneFile(const std::string &path, const FileLoc *from) {
     auto fail = [&](const std::string &why) -> PbrtError {
         std::string msg = "\"" + path + "\": " + why;
@@ -53,18 +56,11 @@ std::string ReadSceneFile(const std::string &path, const FileLoc *from) {
     };
     if (HasSuffix(path, ".gz"))
         throw fail("gzip-compressed scene files are not supported; decompress it first");
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw fail("is a directory, not a scene file");
-    if (!std::filesystem::exists(path, ec)) throw fail("no such scene file");
-    if (!IsRegularFile(path)) throw fail("not a regular file");
-    // One read of the whole file (far faster than a character iterator on big meshes).
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) throw fail("cannot open scene file");
-    std::string text(size_t(in.tellg()), '\0');
-    in.seekg(0);
-    if (!in.read(text.data(), std::streamsize(text.size())))
-        throw fail("error reading scene file");
-    return text;
+    try {
+        return ReadRegularFile(path, "scene");
+    } catch (const FileReadError &e) {
+        throw fail(e.what());
+    }
 }
 
 }  // namespace
@@ -224,6 +220,9 @@ class TokenStream {
     }
     FileLoc Loc(const Token &t) const { return tokenizer.Loc(t); }
     const std::string &Filename() const { return tokenizer.Filename(); }
+    // Whether the file has begun with a directive: only then do error messages quote its
+    // text (see Dispatcher::Parse).
+    bool sceneText = false;
 
   private:
     Tokenizer tokenizer;
@@ -495,9 +494,35 @@ void Dispatcher::PopScope(TokenStream &ts, const Token &directive, char kind) {
     scopes.pop_back();
 }
 
+// The directives of the format (those Parse dispatches on).
+bool IsDirective(std::string_view d) {
+    static const char *const names[] = {
+        "Shape", "Material", "MakeNamedMaterial", "LightSource", "AreaLightSource", "Camera",
+        "Film", "Sampler", "PixelFilter", "Integrator", "Accelerator", "MakeNamedMedium",
+        "AttributeBegin", "AttributeEnd", "NamedMaterial", "Texture", "Translate", "Scale",
+        "Rotate", "LookAt", "Transform", "ConcatTransform", "Identity", "CoordinateSystem",
+        "CoordSysTransform", "ActiveTransform", "TransformTimes", "ReverseOrientation",
+        "WorldBegin", "Attribute", "ObjectBegin", "ObjectEnd", "ObjectInstance", "ColorSpace",
+        "Option", "MediumInterface", "Include", "Import", "TransformBegin", "TransformEnd",
+        "WorldEnd"};
+    for (const char *n : names)
+        if (d == n) return true;
+    return false;
+}
+
 void Dispatcher::Parse(TokenStream &ts, int depth) {
     Token t;
     while (ts.Next(&t)) {
+        // A file is scene text once it begins with a directive; one that does not (a system
+        // file an Include names, a binary file) is refused at its first token, naming the file
+        // and the line but not quoting its content, which an error message could otherwise
+        // disclose (design §5.5). Comments and white space before the first directive are fine.
+        if (!ts.sceneText) {
+            if (t.IsQuoted() || !IsDirective(t.text))
+                throw PbrtError(ts.Loc(t), "not a pbrt-v4 scene file: it does not begin with a "
+                                           "directive (its content is not shown)");
+            ts.sceneText = true;
+        }
         if (t.IsQuoted() || t.IsOpenBracket() || t.IsCloseBracket()) {
             const char *why = t.IsQuoted() ? "expected a directive, got the string "
                                            : "mismatched brackets: expected a directive, got ";

@@ -442,8 +442,10 @@ TEST(Parser, MalformedInputNamesFileLineAndColumn) {
         {"Option \"integer seed\" 1.5", "bad.pbrt:1:23", "wrong type"},
         {"Option \"bool b\" [ true false ]", "bad.pbrt:1:24", "expects one value"},
         {"WorldBegin 1.5", "bad.pbrt:1:12", "expected a directive, got the number"},
-        {"\"Shape\"", "bad.pbrt:1:1", "expected a directive, got the string"},
-        {"[ Shape ]", "bad.pbrt:1:1", "mismatched brackets"},
+        {"WorldBegin \"Shape\"", "bad.pbrt:1:12", "expected a directive, got the string"},
+        {"WorldBegin [ Shape ]", "bad.pbrt:1:12", "mismatched brackets"},
+        {"\"Shape\"", "bad.pbrt:1:1", "not a pbrt-v4 scene file"},
+        {"# comment\n[ Shape ]", "bad.pbrt:2:1", "not a pbrt-v4 scene file"},
         {"WorldBegin\nInclude \"no-such-file.pbrt\"", "bad.pbrt:2:1", "no-such-file.pbrt"},
         {"Include \"/\"", "bad.pbrt:1:1", "is a directory, not a scene file"},
         {"Include \"x.pbrt.gz\"", "bad.pbrt:1:1", "gzip"},
@@ -454,6 +456,49 @@ TEST(Parser, MalformedInputNamesFileLineAndColumn) {
             << "input: " << c.text << "\nmessage: " << msg;
         EXPECT_NE(msg.find(c.reason), std::string::npos)
             << "input: " << c.text << "\nmessage: " << msg;
+    }
+}
+
+TEST(Parser, FilesThatAreNotSceneTextAreNamedNotQuoted) {
+    // An Include or Import of a file that is not scene text (a system file) used to repeat
+    // its first line in the error: the message names the file and the line, not the content.
+    TempDir dir;
+    const std::string secret = "root:x:0:0:secret-hash:/root:/bin/bash";
+    std::string passwd = dir.Write("passwd", "# a comment line\n" + secret + "\nmore text\n");
+    for (const char *directive : {"Include", "Import"}) {
+        std::string scene = dir.Write("scene.pbrt", std::string("WorldBegin\n") + directive +
+                                                         " \"passwd\"\n");
+        RecordingTarget t;
+        try {
+            ParseFiles(&t, {scene});
+            ADD_FAILURE() << directive << ": no error";
+        } catch (const PbrtError &e) {
+            std::string msg = e.what();
+            EXPECT_EQ(msg.rfind(passwd + ":2:1: not a pbrt-v4 scene file", 0), 0u) << msg;
+            EXPECT_EQ(msg.find("root"), std::string::npos) << msg;
+            EXPECT_EQ(msg.find("secret"), std::string::npos) << msg;
+        }
+    }
+    // The same for a file named on the command line, and for a file of bytes.
+    std::string binary = dir.Write("binary", std::string("\x7f" "ELF\x02\x01secret", 11));
+    for (const std::string &f : {passwd, binary}) {
+        RecordingTarget t;
+        try {
+            ParseFiles(&t, {f});
+            ADD_FAILURE() << f << ": no error";
+        } catch (const PbrtError &e) {
+            EXPECT_NE(std::string(e.what()).find("not a pbrt-v4 scene file"), std::string::npos) << e.what();
+            EXPECT_EQ(std::string(e.what()).find("secret"), std::string::npos) << e.what();
+        }
+    }
+    // Scene text still gets its tokens quoted once it has begun with a directive.
+    std::string scene = dir.Write("typo.pbrt", "WorldBegin\nShpae \"sphere\"\n");
+    RecordingTarget t;
+    try {
+        ParseFiles(&t, {scene});
+        ADD_FAILURE() << "no error for a misspelt directive";
+    } catch (const PbrtError &e) {
+        EXPECT_NE(std::string(e.what()).find("unknown directive 'Shpae'"), std::string::npos) << e.what();
     }
 }
 

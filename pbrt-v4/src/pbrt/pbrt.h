@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -44,5 +45,12 @@ void Warning(const FileLoc &loc, const std::string &msg);
 // Drops every warning from now on (true) or prints them again (false): for fuzzing, where
 // millions of distinct warnings would fill stderr and the set of messages already printed.
 void SuppressWarnings(bool suppress);
+// --log-level verbose: Verbose() prints what was loaded and how ("pbrt: ..."); otherwise it
+// prints nothing. SetLogFile sends warnings and verbose lines to f instead of stderr (the
+// caller keeps f open; nullptr: stderr again).
+void SetVerbose(bool on);
+bool IsVerbose();
+void Verbose(const std::string &msg);
+void SetLogFile(std::FILE *f);
 
 }  // namespace pbrt

@@ -30,6 +30,15 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     m.floats["meanPathDepth"] = stats.paths ? float(double(stats.scatterings) / double(stats.paths)) : 0.f;
     if (stats.wavelengthRepeats > 1) m.ints["wavelengthRepeats"] = stats.wavelengthRepeats;
     m.strings["seed"] = std::to_string(scene.sampler.Seed());
+    // pbrt-v4's camera matrices (cameras.h), row by row.
+    auto rows = [](const SquareMatrix4 &a) {
+        std::array<float, 16> v;
+        for (int i = 0; i < 4; ++i)
+            for (int j = 0; j < 4; ++j) v[size_t(4 * i + j)] = float(a.m[i][j]);
+        return v;
+    };
+    m.matrices["worldToCamera"] = rows(scene.camera->CameraFromWorld());
+    m.matrices["worldToNDC"] = rows(scene.camera->NDCFromWorld());
     m.strings["wavelengthSampler"] = scene.wavelengths.Name();
     m.float2s["wavelengthRange"] = {float(scene.wavelengths.MinLambda()), float(scene.wavelengths.MaxLambda())};
     if (const TableWavelengthSampler *t = scene.wavelengths.Table()) {
@@ -68,7 +77,7 @@ void WarnNonFinite(const Scene &scene, const Ray &cameraRay) {
 }  // namespace
 
 RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats,
-                   const WavelengthGuide *guide) {
+                   const std::function<void(int sppDone)> &afterPass, const WavelengthGuide *guide) {
     std::unique_ptr<tbb::global_control> limit;
     if (nThreads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(nThreads));
@@ -85,57 +94,65 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
     double cpu0 = ProcessCPUSeconds();
     std::atomic<uint64_t> scatterings{0};
 
-    tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 1), [&](const tbb::blocked_range<int> &range) {
-        pbrt::Sampler sampler = scene.sampler;
-        uint64_t depthSum = 0;
-        for (int tile = range.begin(); tile != range.end(); ++tile) {
-            int x0 = bounds.pMin.x + (tile % nx) * kTile, y0 = bounds.pMin.y + (tile / nx) * kTile;
-            int x1 = std::min(x0 + kTile, bounds.pMax.x), y1 = std::min(y0 + kTile, bounds.pMax.y);
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    Point2i p{x, y};
-                    // Wavelength guiding: the pixel's own table (design §1.8).
-                    const WavelengthSampler &wavelengths = guide ? guide->SamplerAt(p) : scene.wavelengths;
-                    for (int s = 0; s < spp; ++s) {
-                        RGB rgb(0, 0, 0);
-                        FilterSample fs;
-                        for (int r = 0; r < repeats; ++r) {
-                            // A repeat replays the sample's numbers from its start; only the
-                            // wavelength number is shifted (r = 0: the sample as it is).
-                            sampler.StartPixelSample(p, s);
-                            // Film position from the filter's distribution around the pixel centre.
-                            Point2f uFilter = sampler.GetPixel2D();
-                            fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
-                                                          : scene.filter.Sample(uFilter);
-                            Point2f pFilm(x + 0.5f + fs.p.x, y + 0.5f + fs.p.y);
-                            // Four wavelengths from one number: the seam for other samplers.
-                            Float uLambda = sampler.Get1D();
-                            if (scene.disableWavelengthJitter) uLambda = 0.5f;
-                            if (r > 0) {
-                                uLambda += Float(r) / Float(repeats);
-                                uLambda -= std::floor(uLambda);
+    // One pass of every sample, or passes of 1, 1, 2, 4, ..., 64 samples when afterPass is given.
+    for (int s0 = 0, passSize = 1; s0 < spp;) {
+        const int s1 = afterPass ? std::min(spp, s0 + passSize) : spp;
+        tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 1), [&](const tbb::blocked_range<int> &range) {
+            pbrt::Sampler sampler = scene.sampler;
+            uint64_t depthSum = 0;
+            for (int tile = range.begin(); tile != range.end(); ++tile) {
+                int x0 = bounds.pMin.x + (tile % nx) * kTile, y0 = bounds.pMin.y + (tile / nx) * kTile;
+                int x1 = std::min(x0 + kTile, bounds.pMax.x), y1 = std::min(y0 + kTile, bounds.pMax.y);
+                for (int y = y0; y < y1; ++y)
+                    for (int x = x0; x < x1; ++x) {
+                        Point2i p{x, y};
+                        // Wavelength guiding: the pixel's own table (design §1.8).
+                        const WavelengthSampler &wavelengths = guide ? guide->SamplerAt(p) : scene.wavelengths;
+                        for (int s = s0; s < s1; ++s) {
+                            RGB rgb(0, 0, 0);
+                            FilterSample fs;
+                            for (int r = 0; r < repeats; ++r) {
+                                // A repeat replays the sample's numbers from its start; only the
+                                // wavelength number is shifted (r = 0: the sample as it is).
+                                sampler.StartPixelSample(p, s);
+                                // Film position from the filter's distribution around the pixel centre.
+                                Point2f uFilter = sampler.GetPixel2D();
+                                fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
+                                                              : scene.filter.Sample(uFilter);
+                                Point2f pFilm(x + 0.5f + fs.p.x, y + 0.5f + fs.p.y);
+                                // Four wavelengths from one number: the seam for other samplers.
+                                Float uLambda = sampler.Get1D();
+                                if (scene.disableWavelengthJitter) uLambda = 0.5f;
+                                if (r > 0) {
+                                    uLambda += Float(r) / Float(repeats);
+                                    uLambda -= std::floor(uLambda);
+                                }
+                                SampledWavelengths lambda = wavelengths.Sample(uLambda);
+                                Point2f uLens = sampler.Get2D();
+                                Ray ray = scene.camera->GenerateRay(pFilm, uLens);
+                                int depth = 0;
+                                SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth, &depth);
+                                depthSum += uint64_t(depth);
+                                if (!IsFinite(L)) {
+                                    WarnNonFinite(scene, ray);
+                                    L = SampledSpectrum(0);
+                                }
+                                RGB c = film.ToRGB(L, lambda);
+                                if (film.IsSpectral()) film.AddSpectralSample(p, L, lambda, fs.weight / Float(repeats));
+                                if (repeats == 1) rgb = c;
+                                else rgb += c / Float(repeats);
                             }
-                            SampledWavelengths lambda = wavelengths.Sample(uLambda);
-                            Point2f uLens = sampler.Get2D();
-                            Ray ray = scene.camera->GenerateRay(pFilm, uLens);
-                            int depth = 0;
-                            SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth, &depth);
-                            depthSum += uint64_t(depth);
-                            if (!IsFinite(L)) {
-                                WarnNonFinite(scene, ray);
-                                L = SampledSpectrum(0);
-                            }
-                            RGB c = film.ToRGB(L, lambda);
-                            if (repeats == 1) rgb = c;
-                            else rgb += c / Float(repeats);
+                            film.AddSample(p, rgb, fs.weight);
                         }
-                        film.AddSample(p, rgb, fs.weight);
                     }
-                }
-            progress.Update(int64_t(x1 - x0) * (y1 - y0) * spp);
-        }
-        scatterings += depthSum;
-    });
+                progress.Update(int64_t(x1 - x0) * (y1 - y0) * (s1 - s0));
+            }
+            scatterings += depthSum;
+        });
+        if (afterPass) afterPass(s1);
+        if (s0 > 0) passSize = std::min(2 * passSize, 64);
+        s0 = s1;
+    }
     progress.Done();
 
     RenderStats stats;

@@ -11,6 +11,7 @@
 #include <pbrt/util/image.h>
 
 #include <cstdint>
+#include <functional>
 
 namespace pbrt {
 
@@ -27,9 +28,16 @@ struct RenderStats {
 // Renders into scene.film. nThreads 0 uses every core. wavelengthRepeats K > 1 traces each
 // camera sample K times, with the sampler's numbers replayed except the wavelength number u,
 // which becomes (u + k/K) mod 1, and adds their mean (--wavelength-repeats, design §5.2).
+//
+// afterPass, when given, makes the render go in passes over the whole image, of 1, 1, 2, 4,
+// ..., 64 samples per pixel (pbrt-v4's waves), and is called after each with the samples per
+// pixel done so far (--write-partial-images, --mse-reference-out). A pixel's value is the same
+// either way: its samples are added in the same order.
+//
 // With a guide (wavelength guiding, guiding.h), each pixel draws its wavelengths from the
 // guide's table for that pixel instead of scene.wavelengths.
 RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats = 1,
+                   const std::function<void(int sppDone)> &afterPass = {},
                    const WavelengthGuide *guide = nullptr);
 
 // The provenance an EXR image of the render records (with the film's "chromaticities" and

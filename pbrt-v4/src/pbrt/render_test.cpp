@@ -171,13 +171,18 @@ TEST(Render, VisibleAndUniformWavelengthSamplingAgree) {
 TEST(Render, AllSamplersConvergeToTheSameImage) {
     RenderOptions opts;
     opts.spp = 32;
+    // Every sampler pbrt-v4 names, some with another randomization: the directive's name
+    // and parameters replace "sobol".
     auto withSampler = [](const std::string &name) {
         std::string scene = kSpectralBox;
-        scene.replace(scene.find("\"sobol\""), 7, "\"" + name + "\"");
+        scene.replace(scene.find("\"sobol\""), 7, name);
         return scene;
     };
     auto ref = MeanOverSeeds(kSpectralBox, opts, 8);
-    for (const char *name : {"independent", "stratified", "halton"}) {
+    for (const char *name : {"\"independent\"", "\"stratified\"", "\"halton\"", "\"zsobol\"", "\"paddedsobol\"",
+                             "\"pmj02bn\"", "\"halton\" \"string randomization\" \"owen\"",
+                             "\"zsobol\" \"string randomization\" \"permutedigits\"",
+                             "\"sobol\" \"string randomization\" \"none\""}) {
         auto other = MeanOverSeeds(withSampler(name), opts, 8);
         for (int c = 0; c < 3; ++c) {
             double sigma = std::sqrt(Sqr(ref[c].stderror) + Sqr(other[c].stderror));
@@ -195,6 +200,15 @@ TEST(Render, DeterministicWhateverTheThreadCount) {
     EXPECT_EQ(one.pixels, two.pixels);
     opts.seed = 5;
     EXPECT_NE(RenderString(kSpectralBox, opts, 2).pixels, one.pixels) << "the seed must matter";
+    // The samplers that run one sequence over the image too (their pixels' values depend on
+    // where the pixel is, never on when it is rendered).
+    for (const char *name : {"\"zsobol\"", "\"halton\"", "\"pmj02bn\"", "\"paddedsobol\""}) {
+        std::string scene = kSpectralBox;
+        scene.replace(scene.find("\"sobol\""), 7, name);
+        RenderOptions o;
+        o.spp = 4;
+        EXPECT_EQ(RenderString(scene, o, 1).pixels, RenderString(scene, o, 2).pixels) << name;
+    }
 }
 
 TEST(Render, PlyMeshRendersLikeTheInlineMesh) {

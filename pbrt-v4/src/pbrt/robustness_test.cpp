@@ -18,6 +18,7 @@
 #include <iterator>
 #include <limits>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 using namespace pbrt;
@@ -186,6 +187,48 @@ TEST(Robustness, InstancesBeyondRangeAreRefused) {
     SurfaceInteraction si;
     ASSERT_TRUE(scene->accel->Intersect(Ray(Point3f(0, 0, 0), Vector3f(0, 0, 1)), &si));
     EXPECT_NEAR(si.tHit, 1e11 - 1, 1e11 * 1e-6);
+}
+
+// --- Devices and FIFOs where files are expected: refused before any read (design §5.5) ------
+
+TEST(Robustness, DevicesAndFifosAreRefusedWithoutReading) {
+    // A FIFO nobody writes to blocked pbrt for ever; /dev/zero was read until memory ran out.
+    TempDir dir;
+    for (const char *name : {"fifo.spd", "fifo.pbrt", "fifo.ply"})
+        ASSERT_EQ(mkfifo(dir.File(name).c_str(), 0600), 0) << name;
+    std::filesystem::create_symlink("/dev/zero", dir.File("zero.spd"));
+    std::filesystem::create_symlink("/dev/zero", dir.File("zero.pbrt"));
+    std::string name = dir.File("scene.pbrt");
+    auto expect = [&](const std::string &text, const std::string &where, const std::string &kind) {
+        std::string msg = LoadError(text, {}, name);
+        EXPECT_NE(msg.find(name + where), std::string::npos) << msg;
+        EXPECT_NE(msg.find("not a regular file (a device, FIFO or socket), not a " + kind + " file"),
+                  std::string::npos)
+            << msg;
+    };
+    for (const char *spd : {"fifo.spd", "zero.spd"})
+        expect(std::string("WorldBegin\nLightSource \"infinite\" \"spectrum L\" \"") + spd + "\"\n", ":2:24",
+               "spectrum");
+    for (const char *inc : {"fifo.pbrt", "zero.pbrt"})
+        expect(std::string("WorldBegin\nInclude \"") + inc + "\"\n", ":2:1", "scene");
+    expect("WorldBegin\nShape \"plymesh\" \"string filename\" \"fifo.ply\"\n", ":2:17", "PLY");
+    // The scene itself.
+    try {
+        LoadScene({dir.File("fifo.pbrt")}, RenderOptions{});
+        ADD_FAILURE() << "a FIFO loaded as a scene";
+    } catch (const PbrtError &e) {
+        EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Robustness, SpectrumFileLargerThan64MiBIsRefused) {
+    TempDir dir;
+    std::string text = "400 1\n500 1\n";
+    while (text.size() <= (size_t(64) << 20)) text += "#" + std::string(1023, 'x') + "\n";
+    dir.Write("big.spd", text);
+    std::string name = dir.File("scene.pbrt");
+    std::string msg = LoadError("WorldBegin\nLightSource \"infinite\" \"spectrum L\" \"big.spd\"\n", {}, name);
+    EXPECT_NE(msg.find("big.spd: larger than 64 MiB, not a spectrum file"), std::string::npos) << msg;
 }
 
 // --- Directories where files are expected --------------------------------------------------

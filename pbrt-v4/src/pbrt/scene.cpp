@@ -257,8 +257,7 @@ class SceneBuilder : public ParserTarget {
         // A film that cannot be made (too big for memory, a bad resolution) is refused here,
         // before the world (perhaps huge meshes) is read; EndOfFiles makes it for real.
         ParameterDictionary early(filmDesc->params);
-        FilmSettings::Create(type, early, graphicsState.colorSpace, opts.resolution,
-                             opts.resolutionScale, loc);
+        FilmSettings::Create(type, early, graphicsState.colorSpace, opts, loc);
     }
     void Sampler(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
         RequireOptionsBlock("Sampler", loc);
@@ -579,7 +578,7 @@ void SceneBuilder::LightSource(const std::string &name, ParsedParameterVector pa
     if (currentObject != 0) throw PbrtError(loc, "LightSource inside an object definition is not supported");
     CheckNoMotion(loc, "LightSource");
     ParameterDictionary dict(Concat(std::move(params), graphicsState.lightAttributes));
-    const char *specName = (name == "point" || name == "spot" || name == "goniometric" || name == "projection") ? "I" : "L";
+    const char *specName = EmissionParameterName("LightSource", name);
     SpectrumHandle spec = GetSpectrum(dict, specName, SpectrumType::Illuminant, *graphicsState.colorSpace);
     Light light = Light::Create(name, dict, graphicsState.ctm[0], spec, *graphicsState.colorSpace, loc);
     CheckUnused(dict, "LightSource \"" + name + "\"");
@@ -613,7 +612,8 @@ void SceneBuilder::Shape(const std::string &name, ParsedParameterVector params, 
         } else {
             const AreaLightDesc &al = *graphicsState.areaLight;
             lightDict.emplace(al.params);
-            L = GetSpectrum(*lightDict, "L", SpectrumType::Illuminant, *al.colorSpace);
+            L = GetSpectrum(*lightDict, EmissionParameterName("AreaLightSource", al.name),
+                            SpectrumType::Illuminant, *al.colorSpace);
         }
     }
     auto addLights = [&](std::shared_ptr<const TriangleMesh> mesh, const Sphere *sphere) {
@@ -662,7 +662,7 @@ void SceneBuilder::EndOfFiles() {
     Desc film = filmDesc ? *filmDesc : Desc{"rgb", {}, FileLoc{}, graphicsState.colorSpace};
     ParameterDictionary filmDict(film.params);
     FilmSettings fs = FilmSettings::Create(film.name, filmDict, film.colorSpace ? film.colorSpace : RGBColorSpace::sRGB,
-                                           opts.resolution, opts.resolutionScale, film.loc);
+                                           opts, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
     if (opts.outfile.empty() && opts.emissionSpectrum.empty() && opts.materialReflectances.empty() &&
         opts.emissionTable.empty() && opts.guidingSpectraDir.empty()) {
@@ -687,7 +687,7 @@ void SceneBuilder::EndOfFiles() {
     Desc samp = samplerDesc ? *samplerDesc : Desc{"zsobol", {}, FileLoc{}, nullptr};
     ParameterDictionary sampDict(samp.params);
     scene->sampler = pbrt::Sampler::Create(samp.name, sampDict, optionSeed ? uint64_t(*optionSeed) : 0,
-                                           opts.seed, opts.spp, samp.loc);
+                                           opts.seed, opts.spp, samp.loc, fs.fullResolution, opts.quick);
     CheckUnused(sampDict, "Sampler \"" + samp.name + "\"");
 
     // pbrt-v4's default integrator is "volpath", which we render as "path" (no media).
@@ -733,6 +733,9 @@ std::unique_ptr<Scene> Build(const RenderOptions &opts, const std::function<void
     auto scene = std::make_unique<Scene>();
     SceneBuilder builder(scene.get(), opts);
     parse(&builder);
+    scene->disablePixelJitter |= opts.disablePixelJitter;
+    scene->disableWavelengthJitter |= opts.disableWavelengthJitter;
+    Verbose("loaded the scene: " + std::to_string(scene->lights.size()) + " lights");
     return scene;
 }
 

@@ -16,22 +16,18 @@
 #include <pbrt/pbrt.h>
 #include <pbrt/wavelengths.h>
 
+#include <wavelength_table.h>
+
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace pbrt {
 
-// How much of one emitter's light falls where the sampler's density is zero. Fractions are
-// of the emitter's tristimulus integrals over 360..830 nm (the range the CMFs cover).
-struct UnsampledEmission {
-    FileLoc loc;                                // the light's directive (empty if unknown)
-    std::vector<std::pair<Float, Float>> gaps;  // zero-density stretches [nm] where it emits
-    Float gapLuminanceFraction = 0;             // of its luminance (Y) inside those gaps
-    // Outside [MinLambda(), MaxLambda()] (but inside 360..830 nm):
-    std::vector<std::pair<Float, Float>> outside;  // the stretches [nm] where it emits
-    Float outsideLuminanceFraction = 0;            // of its luminance (Y)
-    Float outsideTristimulusFraction = 0;          // the largest over X, Y and Z
+// How much of one emitter's light falls where the sampler's density is zero: the header's
+// measure (wavelength_table::Coverage, design §1.5), with the light's directive.
+struct UnsampledEmission : wavelength_table::Coverage {
+    FileLoc loc;  // the light's directive (empty if unknown)
 };
 
 // One entry per distinct emitter (lights that share a spectrum and a directive, such as the
@@ -41,14 +37,13 @@ struct UnsampledEmission {
 std::vector<UnsampledEmission> FindUnsampledEmission(const WavelengthSampler &sampler,
                                                      const std::vector<Light> &lights);
 
-// Emission outside the table's range below these fractions is not worth a warning: a table on
-// the default 380..780 nm grid misses about 1e-5 of the luminance of a lamp with a flat floor
-// (the CMFs are tiny at the ends). 1e-3 of a tristimulus value is about 0.1 CIEDE2000.
-constexpr Float kOutsideLuminanceWarnFraction = 1e-4;
-constexpr Float kOutsideTristimulusWarnFraction = 1e-3;
+// The thresholds of design §1.5, the header's.
+using wavelength_table::kOutsideLuminanceWarnFraction;
+using wavelength_table::kOutsideTristimulusWarnFraction;
 
-// The warning texts (each starts with the light's file:line:column when known): every gap
-// where a light emits, and emission outside the range above the thresholds.
+// The warning texts (each starts with the light's file:line:column when known): the header's
+// (wavelength_table::CoverageWarnings), with this renderer's other fix for emission outside
+// the table's range, uniform sampling over the same range.
 std::vector<std::string> UnsampledEmissionWarnings(const WavelengthSampler &sampler,
                                                    const std::vector<Light> &lights);
 

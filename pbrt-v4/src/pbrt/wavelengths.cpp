@@ -76,25 +76,9 @@ WavelengthSampler WavelengthSampler::FromTable(const std::string &path, Float de
     }
     try {
         // The bytes are read once, hashed for the image's provenance and parsed, so the
-        // hash is of exactly the table rendered with.
-        std::error_code ec;
-        std::ifstream in;
-        if (!std::filesystem::is_directory(path, ec)) in.open(path, std::ios::binary);
-        if (!in.is_open() || !in) {
-            wavelength_table::LoadTable(path);  // throws the reader's "FILE: reason"
-            throw PbrtError(path + ": cannot open the table file");
-        }
-        // A bound on the size keeps a wrong file (a device, a huge log) from exhausting
-        // memory; it is far above any real table (1 nm steps over 360..830 nm: ~30 kB).
-        constexpr size_t kMaxTableBytes = size_t(64) << 20;
-        std::string bytes;
-        char chunk[1 << 16];
-        while (in.read(chunk, sizeof chunk), in.gcount() > 0) {
-            bytes.append(chunk, size_t(in.gcount()));
-            if (bytes.size() > kMaxTableBytes)
-                throw PbrtError(path + ": larger than 64 MiB, not a wavelength table");
-        }
-        if (in.bad()) throw PbrtError(path + ": cannot read the table file");
+        // hash is of exactly the table rendered with. ReadTableFile takes regular files of
+        // at most 64 MiB only (design §2.3): a device or a FIFO is refused without a read.
+        const std::string bytes = wavelength_table::ReadTableFile(path);
         std::istringstream text(bytes);
         wavelength_table::Table t = wavelength_table::ParseTable(text, path);
         if (defensiveShare > 0) t = wavelength_table::WithDefensiveMixture(t, defensiveShare);

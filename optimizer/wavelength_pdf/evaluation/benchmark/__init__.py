@@ -36,7 +36,9 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     from wavelength_pdf.evaluation.benchmark import timing as T
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
-    out = Path(out)
+    # Absolute: the renders' cache keys hold the tables' paths, which must not depend on how
+    # the folder was spelled (-o out/benchmark and -o /abs/out/benchmark are the same grid).
+    out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     for s in spec.skipped:
         say(f"benchmark: skipped {s}")
@@ -46,6 +48,16 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     plans = [run.plan_job(job, out, spec.shared, pbrt) for job in spec.jobs]
     if render:
         run.run(plans, workers=workers, scheduler=scheduler, nthreads=nthreads, say=say)
+    else:
+        # A grid stopped early: score the finished jobs, name the others.
+        done = [p for p in plans if run.finished(p)]
+        if len(done) < len(plans):
+            kept = {id(p) for p in done}
+            say(f"benchmark: {len(plans) - len(done)} of {len(plans)} jobs are not finished and left out of the "
+                "report: " + ", ".join(p.job.name for p in plans if id(p) not in kept))
+        if not done:
+            raise ValueError("benchmark: no job is finished; run without --no-render first")
+        plans = done
     scores = [run.score(p) for p in plans]
     rows = report.flatten(scores)
     report.write_csv(out / "results.csv", rows)
@@ -56,7 +68,8 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     elif (out / "timing.csv").is_file():
         et = report.equal_time(rows, T.read_timing(out / "timing.csv"), timing_spp)
     spp = report_spp if any(r["spp"] == report_spp for r in rows) else max(r["spp"] for r in rows)
-    scene_jobs = [j for j in report.jobs_of(rows, "scenes", "sobol") if "/2482/" in j or "/own/" in j] or \
+    headline = (f"/{G.HEADLINE_LAMP}/", "/own/")
+    scene_jobs = [j for j in report.jobs_of(rows, "scenes", "sobol") if any(h in j for h in headline)] or \
         report.jobs_of(rows, None, "sobol")[:12]
     report.plot_errors(rows, scene_jobs, out / IMAGES[0])
     lamp_jobs = report.jobs_of(rows, "lamps")

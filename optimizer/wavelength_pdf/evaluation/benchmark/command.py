@@ -68,7 +68,8 @@ def add_parser(sub, out: Path) -> None:
     b.add_argument("--timing-rounds", type=int, default=5, metavar="R", help="renders per sampler (default 5)")
     b.add_argument("--timing-spp", type=int, default=64, metavar="N", help="spp of the timed renders (default 64)")
     b.add_argument("--no-render", action="store_true",
-                   help="score and report the renders already there, render nothing")
+                   help="score and report the renders already there, render nothing (jobs not "
+                        "finished are named and left out)")
     b.add_argument("--docs", type=Path, default=None, metavar="DIR",
                    help="also copy report.md, the CSVs and the plots to DIR (e.g. docs/benchmark)")
     b.add_argument("--nthreads", type=int, default=None, help="renderer threads per render (default: cores/workers)")

@@ -163,17 +163,27 @@ def plot_errors(rows: Sequence[dict], jobs: Sequence[str], path: Path, measure: 
     cols = min(4, n)
     fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3.2 * cols, 2.6 * ((n + cols - 1) // cols)),
                              squeeze=False)
-    styles = {"optimized": dict(color="k", lw=2), G.FLOOR: dict(color="0.5", ls=":", lw=2)}
+    order = [*G.SIMPLE, "start", "reference", G.SCENE_COLOURS, "optimized", G.FLOOR]
+    # One colour per row in every panel (a panel without a row must not shift the others').
+    styles = {row: dict(color=f"C{i}") for i, row in enumerate(order)}
+    styles["optimized"] = dict(color="k", lw=2)
+    styles[G.FLOOR] = dict(color="0.5", ls=":", lw=2)
+    spps = sorted({r["spp"] for r in rows if r["job"] in jobs})
     for ax, job in zip(axes.ravel(), jobs):
-        for row in [*G.SIMPLE, "start", "reference", G.SCENE_COLOURS, "optimized", G.FLOOR]:
+        for row in order:
             pts = sorted((r["spp"], r[measure]) for r in rows if r["job"] == job and r["row"] == row)
             if pts:
-                ax.loglog(*zip(*pts), marker="o", ms=3, label=row, **styles.get(row, {}))
+                ax.loglog(*zip(*pts), marker="o", ms=3, label=row, **styles[row])
         ax.set_title(job, fontsize=7)
+        ax.set_xticks(spps, [str(n) for n in spps])
+        ax.minorticks_off()
         ax.tick_params(labelsize=6)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    axes[0, 0].legend(fontsize=5)
+    from matplotlib.lines import Line2D
+
+    present = [row for row in order if any(r["row"] == row and r["job"] in jobs for r in rows)]
+    axes[0, 0].legend([Line2D([], [], marker="o", ms=3, **styles[row]) for row in present], present, fontsize=5)
     fig.supxlabel("samples per pixel", fontsize=8)
     fig.supylabel(f"{measure} (seed pairs)", fontsize=8)
     fig.tight_layout()
@@ -247,6 +257,55 @@ def weight_wins(rows: Sequence[dict], spp: int, measure: str = MAIN) -> dict[str
     return wins
 
 
+def _ratio(rows, job, a: str, b: str, spp: int, measure: str = MAIN) -> float:
+    """Error of row ``a`` over row ``b`` on a job at spp (nan where either is missing)."""
+    ra, rb = _get(rows, job, a, spp), _get(rows, job, b, spp)
+    return ra[measure] / rb[measure] if ra and rb and rb[measure] > 0 else float("nan")
+
+
+def _spread(values: Sequence[float], digits: int = 2) -> str:
+    v = [x for x in values if math.isfinite(x)]
+    if not v:
+        return "–"
+    d = digits
+    return f"{np.median(v):.{d}f} ({min(v):.{d}f}-{max(v):.{d}f})" if len(v) > 1 else f"{v[0]:.{d}f}"
+
+
+def regimes(rows: Sequence[dict]) -> list[tuple[str, list[str]]]:
+    """The jobs grouped by regime: the lamp's kind (own-lamp scenes apart) and pixel sampler."""
+    groups: dict[str, list[str]] = {}
+    for j in jobs_of(rows):
+        r = next(x for x in rows if x["job"] == j)
+        groups.setdefault(f"{r['kind']}, {r['pixel_sampler']}", []).append(j)
+    return sorted(groups.items())
+
+
+def summary_table(rows: Sequence[dict], spp: int, measure: str = MAIN) -> str:
+    """Markdown: per regime, median (range) over its jobs of the table's gain over the best
+    simple sampler, over the ``spd`` table (emission sampling), over uniform and visible; the
+    ``spd`` table's gain over pbrt-v4's visible sampling; the share of the removable error the
+    table and the ``spd`` table remove; how often the table pays (``PAYS``)."""
+    head = ("| regime | jobs | best simple / table | spd / table | uniform / table | visible / table | "
+            "visible (pbrt-v4) / spd | table removes | spd removes | table pays |\n|" + "---|" * 10 + "\n")
+    lines = []
+    for name, js in regimes(rows):
+        js = [j for j in js if _table(rows, j, spp)]
+        if not js:
+            continue
+        g = [gain(rows, j, spp, measure) for j in js]
+        opt = [_table(rows, j, spp)["row"] for j in js]
+        spd_share = [100 * (_get(rows, j, "spd", spp) or {}).get("share_removed_de2", float("nan")) for j in js]
+        pays = sum(1 for x in g if math.isfinite(x) and x >= PAYS)
+        lines.append(f"| {name} | {len(js)} | {_spread(g)} | "
+                     f"{_spread([_ratio(rows, j, 'spd', o, spp, measure) for j, o in zip(js, opt)])} | "
+                     f"{_spread([_ratio(rows, j, 'uniform', o, spp, measure) for j, o in zip(js, opt)])} | "
+                     f"{_spread([_ratio(rows, j, 'visible', o, spp, measure) for j, o in zip(js, opt)])} | "
+                     f"{_spread([_ratio(rows, j, G.BUILTIN, 'spd', spp, measure) for j in js])} | "
+                     f"{_spread([100 * _table(rows, j, spp)['share_removed_de2'] for j in js], 0)} % | "
+                     f"{_spread(spd_share, 0)} % | {pays} of {len(js)} |")
+    return head + "\n".join(lines) + "\n"
+
+
 def write_markdown(path: Path, rows: Sequence[dict], scores: Sequence[dict], et: Sequence[dict], spp: int,
                    command: str, images: Sequence[str]) -> None:
     """The report: checks, the ratio tables of both sweeps, equal time, the regime map."""
@@ -281,6 +340,10 @@ def write_markdown(path: Path, rows: Sequence[dict], scores: Sequence[dict], et:
     wins = weight_wins(rows, spp)
     L.append(f"- Best stratified weight ({spp} spp, `{MAIN}`): " + ", ".join(f"{k} {v}" for k, v in wins.items())
              + " jobs.\n")
+    for n in sorted({r["spp"] for r in rows}):
+        L.append(f"## Summary by regime, {n} spp\n\nMedian (min-max) over the regime's jobs of `{MAIN}` ratios; "
+                 f"\"table pays\": the table beats the best simple sampler by {PAYS}x or more.\n")
+        L.append(summary_table(rows, n))
     for sweep, title in (("scenes", "Scene sweep"), ("lamps", "Lamp sweep"), ("small", "Small grid")):
         for ps in ("sobol", "independent"):
             js = jobs_of(rows, sweep, ps)

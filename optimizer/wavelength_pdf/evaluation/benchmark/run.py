@@ -13,8 +13,8 @@ idempotent task whose finished image is reused):
   against it; chunks 0 + 2 and 1 + 3 are its two halves (its own noise, :mod:`.measures`).
 
 The baseline tables are written in this process (milliseconds each); the optimized tables
-are tasks that their renders wait for. Scoring reads the finished images into
-``OUT/jobs/.../scores.json`` (cached by the renders' keys).
+are tasks on the cluster, all finished before the first render is submitted. Scoring reads
+the finished images into ``OUT/jobs/.../scores.json`` (cached by the renders' keys).
 """
 from __future__ import annotations
 
@@ -206,24 +206,51 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
         return
     with cluster.connect(workers, scheduler) as client:
         slots = cluster.slots_by_host(client)
-        cost = _estimate(client, plans, [r for _, r in todo], nthreads, slots)
+        cost = _estimate(client, plans, [r for _, r in todo], nthreads, slots, say)
         threads = sum(s * (nthreads or cluster.render_threads(cluster.cores(), s)) for s in slots.values())
         say(f"benchmark: {len(todo)} renders to do of {sum(len(p.renders()) for p in plans)} "
             f"({len(plans)} jobs); estimated CPU time {cost / 3600:.2f} h, about "
             f"{cost / 3600 / max(threads, 1):.2f} h wall on {threads} render threads"
             + (f"; {len(optimize)} table(s) to optimize first (not in the estimate)" if optimize else ""))
         made = {path: client.submit(_table_task, sp, path, refl, pure=False) for path, (sp, refl) in optimize.items()}
+        if made:
+            # The tables first, all of them: renders that waited on a table's future sat behind
+            # hundreds of others on a busy cluster (seen: seven tables never started in an hour).
+            with progress.bar(total=len(made), desc="tables", file=sys.stderr, unit="table") as bar:
+                for f in as_completed(list(made.values())):
+                    f.result()
+                    bar.update(1)
         futures = []
-        # Cheap renders first, so that a job's scores can be read early; rows interleaved.
-        for p, r in sorted(todo, key=lambda pr: pr[1].spp * _repeats(pr[1])):
-            deps = [made[t] for t in _tables_of(r) if t in made]
-            futures.append(client.submit(cluster.render_task, r, nthreads, slots, *deps, pure=False))
+        # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),
+        # cheap renders first within a job.
+        order = {id(p): (priority(p.job), i) for i, p in enumerate(plans)}
+        for p, r in sorted(todo, key=lambda pr: (order[id(pr[0])], pr[1].spp * _repeats(pr[1]))):
+            futures.append(client.submit(cluster.render_task, r, nthreads, slots, pure=False))
         with progress.bar(total=len(futures), desc="benchmark", file=sys.stderr, unit="render") as bar:
             for f in as_completed(futures):
                 f.result()
                 bar.update(1)
-        for t, f in made.items():
-            f.result()
+
+
+def priority(job: G.Job) -> int:
+    """The order in which jobs are rendered (lower first): the scene sweep's low-discrepancy
+    jobs under the compact fluorescent lamp or the scene's own lamps, the lamp sweep's
+    ColorChecker, the same scene jobs with independent samples, the rest of the scene sweep,
+    the rest of the lamp sweep."""
+    headline = job.lamp is None or job.lamp.key == G.HEADLINE_LAMP
+    scenes = "scenes" in job.sweep.split("+")
+    if scenes and headline:
+        return 0 if job.pixel_sampler == "sobol" else 2
+    if not scenes and job.scene.key == G.LAMP_SWEEP_SCENES[0]:
+        return 1
+    if scenes:
+        return 3 if job.pixel_sampler == "sobol" else 5
+    return 4
+
+
+def finished(p: JobPlan) -> bool:
+    """Every render of the job is there with its inputs unchanged."""
+    return all(r.done() is not None for r in p.renders())
 
 
 def _tables_of(r: RenderJob) -> list[Path]:
@@ -240,21 +267,35 @@ def _repeats(r: RenderJob) -> int:
     return int(a[a.index("--wavelength-repeats") + 1]) if "--wavelength-repeats" in a else 1
 
 
-def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthreads, slots) -> float:
-    """CPU seconds of ``todo`` from two short renders of each scene copy (on the cluster)."""
+def _estimate(client, plans: Sequence[JobPlan], todo: Sequence[RenderJob], nthreads, slots,
+              say: Callable[[str], None]) -> float:
+    """CPU seconds of ``todo`` from two short renders of one copy of each scene (on the
+    cluster): the copies of a scene differ only in their lamp and pixel sampler, which change
+    the cost little, and probing all of them took longer than some sweeps."""
     from wavelength_pdf.evaluation import cluster
 
-    scenes = sorted({r.scene for r in todo})
+    plan_of = {p.scene: p for p in plans}
+    wanted = {r.scene for r in todo}
+    probe_of: dict[str, JobPlan] = {}
+    for p in plans:
+        if p.scene in wanted:
+            probe_of.setdefault(p.job.scene.key, p)
     probes = {}
-    for s in scenes:
-        plan = next(p for p in plans if p.scene == s)
+    for key, plan in probe_of.items():
         vis = sampler_of(G.BUILTIN, plan.tables)
-        probes[s] = [(spp, client.submit(cluster.probe_task, RenderJob(s, plan.outdir / "probe" / f"{spp}.exr", vis,
-                                                                        spp, 1, plan.truth_chunks[0].pbrt),
-                                          nthreads, slots, pure=False))
-                     for spp in cluster.PROBE_SPP]
-    costs = {s: cluster.fit_cost([(spp, *f.result()) for spp, f in runs]) for s, runs in probes.items()}
-    return sum(costs[r.scene].cpu_seconds(r.spp * _repeats(r)) for r in todo)
+        probes[key] = [(spp, client.submit(cluster.probe_task,
+                                           RenderJob(plan.scene, plan.outdir / "probe" / f"{spp}.exr", vis, spp, 1,
+                                                     plan.truth_chunks[0].pbrt),
+                                           nthreads, slots, pure=False))
+                       for spp in cluster.PROBE_SPP]
+    costs = {k: cluster.fit_cost([(spp, *f.result()) for spp, f in runs]) for k, runs in probes.items()}
+    by_scene: dict[str, float] = {}
+    for r in todo:
+        key = plan_of[r.scene].job.scene.key
+        by_scene[key] = by_scene.get(key, 0.0) + costs[key].cpu_seconds(r.spp * _repeats(r))
+    say("benchmark: estimated CPU minutes by scene: "
+        + ", ".join(f"{k} {v / 60:.0f}" for k, v in sorted(by_scene.items(), key=lambda kv: -kv[1])))
+    return sum(by_scene.values())
 
 
 # --- Scoring ---------------------------------------------------------------------------

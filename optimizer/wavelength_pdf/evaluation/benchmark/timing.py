@@ -29,13 +29,14 @@ FIELDS = ["job", "row", "round", "spp", "process_cpu", "render_cpu", "wall", "de
 
 def timing_plans(plans: Sequence[JobPlan]) -> list[JobPlan]:
     """The jobs timed by default: every scene once, low-discrepancy pixel sampler, under the
-    compact fluorescent lamp 2482 (or its own lamps), else the first lamp it has."""
+    headline lamp (``grid.HEADLINE_LAMP``, or its own lamps), else the first lamp it has."""
     chosen: dict[str, JobPlan] = {}
     for p in plans:
         if p.job.pixel_sampler != "sobol":
             continue
-        prefer = p.job.lamp is None or p.job.lamp.key == "2482"
-        if p.job.scene.key not in chosen or (prefer and chosen[p.job.scene.key].job.lamp_key not in ("own", "2482")):
+        prefer = p.job.lamp is None or p.job.lamp.key == G.HEADLINE_LAMP
+        have = chosen.get(p.job.scene.key)
+        if have is None or (prefer and have.job.lamp_key not in ("own", G.HEADLINE_LAMP)):
             chosen[p.job.scene.key] = p
     return list(chosen.values())
 

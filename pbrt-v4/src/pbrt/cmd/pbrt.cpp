@@ -8,11 +8,20 @@
 
 #include <wavelength_table.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,18 +31,34 @@ using namespace pbrt;
 namespace {
 
 const char *kUsage = R"(usage: pbrt [options] scene.pbrt...   (standard input if no file)
+Options take "--name value", "--name=value" or a single dash ("-spp 16"), as in pbrt-v4.
 
 Rendering:
   --spp N                      samples per pixel (overrides the scene's "pixelsamples")
   --seed N                     seed of the sampler (overrides the scene's)
   --maxdepth N                 maximum path depth (overrides the integrator's "maxdepth")
   --nthreads N                 number of threads (default: all cores)
+  --quick                      a quarter of the resolution each way and 1 sample per pixel
+  --cropwindow X0,X1,Y0,Y1     render only this part of the image (fractions in [0, 1]);
+                               replaces the film's "cropwindow"/"pixelbounds"; the EXR's
+                               data window places it in the frame
+  --pixelbounds X0,X1,Y0,Y1    the same in pixels (X1, Y1 excluded)
+  --pixel X,Y                  render only this pixel
+  --disable-pixel-jitter       sample every pixel at its centre
+  --disable-wavelength-jitter  the same four wavelengths for every path (u = 1/2)
 Output:
   --outfile FILE               image to write (.exr: linear 32-bit float, the colour space's
                                chromaticities and the render's provenance as attributes;
                                .png: sRGB 8-bit); default: the film's "filename"
   --resolution WxH             render at W x H pixels instead of the film's resolution
   --resolution-scale S         multiply the film's (or --resolution's) resolution by S
+  --write-partial-images       render in passes of 1, 1, 2, 4, ..., 64 samples per pixel
+                               and write the image after each
+  --mse-reference-image FILE   print the mean squared error of the image against FILE (an
+                               image of the same size, or of the full frame when cropping)
+                               and record it in the EXR ("MSE")
+  --mse-reference-out FILE     with --mse-reference-image: render in passes (as above) and
+                               write "spp MSE" lines to FILE, one per pass
 Wavelengths (four per path from one random number):
   --wavelength-sampling NAME   visible   pbrt-v4's visible sampling over 360-830 nm (default)
                                uniform   stratified uniform over --wavelength-range
@@ -74,8 +99,8 @@ Wavelengths (four per path from one random number):
   --guiding-tile N             pixels per side of a pre-pass tile, 1..256 (default 8)
   --wavelength-guiding-tables DIR
                                optimized tables for the mixtures: DIR/mixture-HASH.csv
-                               (from wavelength-pdf batch on the spectra below, or
-                               wavelength-pdf guide), each mixed with the defensive share
+                               (from wavelength-pdf batch on the spectra below), each
+                               mixed with the defensive share
   --wavelength-guiding-spectra DIR
                                render nothing: run the pre-pass and write each table's
                                mixture spectrum to DIR/mixture-HASH.spd (and clusters.csv);
@@ -100,8 +125,20 @@ Scene:
                                read tables
 Other:
   --quiet                      no progress bar or summary
+  --stats                      print the render's statistics at the end (time, CPU time,
+                               paths, surface hits, peak memory)
+  --log-level LEVEL            verbose (also what was loaded and how), error (default:
+                               warnings and errors) or fatal (errors only)
+  --log-file FILE              warnings and verbose lines go to FILE (implies verbose)
+  --log-utilization            with verbose logging: the CPU and memory use at the end
   --version                    the version of pbrt (the project's) and exit
   -h, --help                   this text and exit
+  --wavefront, --render-coord-sys NAME, --disable-texture-filtering,
+  --displacement-edge-scale S  accepted with a warning; they change nothing here (one CPU
+                               integrator, rendering in world space, bilinear textures)
+  Refused (exit 1): --gpu, --gpu-device, --interactive, --fullscreen, --display-server,
+  --pixelmaterial, --pixelstats, --debugstart (features of upstream pbrt-v4 this renderer
+  lacks) and --format, --toply, --upgrade (use upstream pbrt-v4 for those)
 )";
 
 [[noreturn]] void Usage(const std::string &msg) {
@@ -127,6 +164,78 @@ double ParseFloat(const std::string &flag, const char *s) {
     return v;
 }
 
+// "a,b,c,d": exactly n comma-separated fields, as pbrt-v4 takes lists on its command line.
+std::vector<std::string> SplitList(const std::string &flag, const std::string &s, size_t n) {
+    std::vector<std::string> parts;
+    size_t start = 0;
+    for (size_t comma; (comma = s.find(',', start)) != std::string::npos; start = comma + 1)
+        parts.push_back(s.substr(start, comma - start));
+    parts.push_back(s.substr(start));
+    if (parts.size() != n)
+        Usage(flag + ": expected " + std::to_string(n) + " comma-separated values, got \"" + s + "\"");
+    return parts;
+}
+
+// A reference for --mse-reference-image: the size of the rendered image, or of the full
+// frame when rendering a crop of it; three channels or more (the first three compared).
+void CheckMSEReference(const std::string &path, const Image &ref, const FilmSettings &fs) {
+    const bool whole = ref.width == fs.pixelBounds.Width() && ref.height == fs.pixelBounds.Height();
+    const bool frame = ref.width == fs.fullResolution.x && ref.height == fs.fullResolution.y;
+    if (!whole && !frame)
+        throw PbrtError(path + ": the reference image is " + std::to_string(ref.width) + "x" +
+                        std::to_string(ref.height) + ", the render " + std::to_string(fs.pixelBounds.Width()) +
+                        "x" + std::to_string(fs.pixelBounds.Height()) + " (of a " +
+                        std::to_string(fs.fullResolution.x) + "x" + std::to_string(fs.fullResolution.y) + " frame)");
+    if (ref.channels < 3)
+        throw PbrtError(path + ": the reference image has " + std::to_string(ref.channels) +
+                        " channel(s); it needs R, G and B");
+}
+
+// Mean over pixels and the R, G, B channels of the squared difference (pbrt-v4's MSE); a
+// full-frame reference is compared where the image lies in the frame.
+double MeanSquaredError(const Image &img, const Image &ref) {
+    const bool frame = ref.width != img.width || ref.height != img.height;
+    const int ox = frame ? img.originX : 0, oy = frame ? img.originY : 0;
+    double sum = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double d = double(img.Get(x, y, c)) - double(ref.Get(x + ox, y + oy, c));
+                sum += d * d;
+            }
+    return sum / (3.0 * img.width * img.height);
+}
+
+double PeakMemoryBytes() {
+    struct rusage u;
+    return getrusage(RUSAGE_SELF, &u) == 0 ? double(u.ru_maxrss) * 1024 : 0;
+}
+
+// --stats: pbrt-v4 prints its statistics on standard output after the render.
+void PrintStats(const RenderStats &s) {
+    std::printf("Statistics:\n");
+    std::printf("  Render time                 %12.3f s\n", s.wallSeconds);
+    std::printf("  CPU time                    %12.3f s\n", s.cpuSeconds);
+    std::printf("  Camera paths                %12llu\n", (unsigned long long)s.paths);
+    std::printf("  Surface interactions        %12llu\n", (unsigned long long)s.scatterings);
+    std::printf("  Surfaces per path           %12.3f\n", s.paths ? double(s.scatterings) / double(s.paths) : 0.0);
+    std::printf("  Paths per CPU-second        %12.4g\n", s.paths / std::max(s.cpuSeconds, 1e-9));
+    std::printf("  Peak memory                 %12.1f MB\n", PeakMemoryBytes() / 1e6);
+}
+
+// Flags of upstream pbrt-v4 for features this renderer lacks: refused, with the reason.
+const char *UnsupportedFlag(const std::string &flag) {
+    if (flag == "--gpu" || flag == "--gpu-device")
+        return "this renderer runs on the CPU only (for the GPU, patch upstream pbrt-v4: patches/README.md)";
+    if (flag == "--interactive" || flag == "--fullscreen" || flag == "--display-server")
+        return "this renderer has no interactive display";
+    if (flag == "--pixelmaterial" || flag == "--pixelstats" || flag == "--debugstart")
+        return "this debugging aid of upstream pbrt-v4 is not implemented here";
+    if (flag == "--format" || flag == "--toply" || flag == "--upgrade")
+        return "this renderer does not rewrite scene files; use upstream pbrt-v4's pbrt for that";
+    return nullptr;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -134,10 +243,16 @@ int main(int argc, char **argv) {
     std::vector<std::string> files;
     bool hasDefensive = false, hasBuiltinSampling = false, hasRange = false, hasWeight = false;
     std::string guidingOption;  // a --guiding-* option given (it needs --wavelength-guiding)
+    bool logUtilization = false, hasLogLevel = false;
+    std::vector<std::string> ignored;  // accepted flags that change nothing here
 
     // Flags take "--flag value" or "--flag=value".
     for (int i = 1; i < argc; ++i) {
         std::string arg = argv[i];
+        // pbrt-v4 takes "-spp" for "--spp" (a lone "-h" stays the short help).
+        if (arg.size() > 2 && arg[0] == '-' && arg[1] != '-' && !std::isdigit((unsigned char)arg[1]) &&
+            arg[1] != '.')
+            arg = "-" + arg;
         if (arg.size() < 2 || arg.compare(0, 2, "--") != 0 || arg == "--") {
             if (arg == "-h") {
                 std::fputs(kUsage, stdout);
@@ -168,6 +283,57 @@ int main(int argc, char **argv) {
             return 0;
         } else if (flag == "--quiet") {
             opts.quiet = true;
+        } else if (flag == "--quick") {
+            opts.quick = true;
+        } else if (flag == "--stats") {
+            opts.stats = true;
+        } else if (flag == "--write-partial-images") {
+            opts.writePartialImages = true;
+        } else if (flag == "--disable-pixel-jitter") {
+            opts.disablePixelJitter = true;
+        } else if (flag == "--disable-wavelength-jitter") {
+            opts.disableWavelengthJitter = true;
+        } else if (flag == "--cropwindow") {
+            std::vector<std::string> v = SplitList(flag, value(), 4);
+            std::array<Float, 4> c;
+            for (size_t k = 0; k < 4; ++k) c[k] = Float(ParseFloat(flag, v[k].c_str()));
+            opts.cropWindow = c;
+        } else if (flag == "--pixelbounds" || flag == "--pixel") {
+            const size_t n = flag == "--pixel" ? 2 : 4;
+            std::vector<std::string> v = SplitList(flag, value(), n);
+            std::array<int, 4> b;
+            for (size_t k = 0; k < n; ++k) b[k] = int(ParseInt(flag, v[k].c_str(), 0, 1 << 30));
+            if (n == 2) b = {b[0], b[0] + 1, b[1], b[1] + 1};
+            if (b[0] >= b[1] || b[2] >= b[3]) Usage(flag + ": the bounds are empty (need X0 < X1 and Y0 < Y1)");
+            opts.pixelBounds = b;
+        } else if (flag == "--mse-reference-image") {
+            opts.mseReference = value();
+            if (opts.mseReference.empty()) Usage("--mse-reference-image needs a file name");
+        } else if (flag == "--mse-reference-out") {
+            opts.mseReferenceOut = value();
+            if (opts.mseReferenceOut.empty()) Usage("--mse-reference-out needs a file name");
+        } else if (flag == "--log-level") {
+            hasLogLevel = true;
+            opts.logLevel = value();
+            if (opts.logLevel != "verbose" && opts.logLevel != "error" && opts.logLevel != "fatal")
+                Usage("--log-level: expected verbose, error or fatal, got \"" + opts.logLevel + "\"");
+        } else if (flag == "--log-file") {
+            opts.logFile = value();
+            if (opts.logFile.empty()) Usage("--log-file needs a file name");
+        } else if (flag == "--log-utilization") {
+            logUtilization = true;
+        } else if (flag == "--wavefront" || flag == "--disable-texture-filtering") {
+            ignored.push_back(flag);
+        } else if (flag == "--render-coord-sys") {
+            std::string v = value();
+            if (v != "camera" && v != "cameraworld" && v != "world")
+                Usage("--render-coord-sys: expected camera, cameraworld or world, got \"" + v + "\"");
+            ignored.push_back(flag);
+        } else if (flag == "--displacement-edge-scale") {
+            if (!(ParseFloat(flag, value()) > 0)) Usage("--displacement-edge-scale must be positive");
+            ignored.push_back(flag);
+        } else if (const char *why = UnsupportedFlag(flag)) {
+            Usage(flag + ": not supported: " + why);
         } else if (flag == "--spp") {
             opts.spp = int(ParseInt(flag, value(), 1, 1 << 30));
         } else if (flag == "--seed") {
@@ -258,6 +424,9 @@ int main(int argc, char **argv) {
         }
         if (flag == "--wavelength-sampling" || flag == "--wavelength-range") hasBuiltinSampling = true;
     }
+    if (opts.cropWindow && opts.pixelBounds) Usage("give --cropwindow or --pixelbounds (--pixel), not both");
+    if (!opts.mseReferenceOut.empty() && opts.mseReference.empty())
+        Usage("--mse-reference-out needs --mse-reference-image");
     if (hasDefensive && opts.wavelengthTable.empty())
         Usage("--wavelength-pdf-defensive needs --wavelength-pdf");
     if (hasBuiltinSampling && !opts.wavelengthTable.empty())
@@ -281,6 +450,22 @@ int main(int argc, char **argv) {
         (!opts.emissionSpectrum.empty() || !opts.materialReflectances.empty() || !opts.emissionTable.empty()))
         Usage("--wavelength-guiding-spectra is a query of its own: run --emission-spectrum, "
               "--material-reflectances and --emission-table separately");
+
+    // Logging, before anything can warn. A log file implies verbose logging (pbrt-v4).
+    std::unique_ptr<std::FILE, int (*)(std::FILE *)> logFile(nullptr, &std::fclose);
+    if (!opts.logFile.empty()) {
+        logFile.reset(std::fopen(opts.logFile.c_str(), "w"));
+        if (!logFile) {
+            std::fprintf(stderr, "pbrt: %s: cannot write the log file: %s\n", opts.logFile.c_str(), std::strerror(errno));
+            return 1;
+        }
+        SetLogFile(logFile.get());
+        if (!hasLogLevel) opts.logLevel = "verbose";
+    }
+    SetVerbose(opts.logLevel == "verbose");
+    if (opts.logLevel == "fatal") SuppressWarnings(true);
+    for (const std::string &f : ignored)
+        Warning(f + " has no effect here (one CPU integrator, rendering in world space, bilinear textures)");
 
     try {
         // A bad wavelength table stops pbrt before the scene is even parsed (the scene
@@ -361,6 +546,10 @@ int main(int argc, char **argv) {
             return 0;
         }
         if (!opts.outfile.empty()) CheckOutputImagePath(opts.outfile);
+        if (!opts.mseReferenceOut.empty()) CheckOutputFilePath(opts.mseReferenceOut);
+        // The reference is read before the scene: a bad one stops pbrt before any work.
+        std::optional<Image> reference;
+        if (!opts.mseReference.empty()) reference = ReadImage(opts.mseReference, false);
         std::unique_ptr<Scene> scene = LoadScene(files, opts);
         std::string outfile = opts.outfile.empty() ? scene->film->Settings().filename : opts.outfile;
         std::optional<WavelengthGuide> guide;
@@ -371,11 +560,17 @@ int main(int argc, char **argv) {
                 throw PbrtError("\"" + dir + "\": the guiding output folder's name is taken by a file");
         }
         const FilmSettings &fs = scene->film->Settings();
+        if (reference) CheckMSEReference(opts.mseReference, *reference, fs);
         if (!opts.quiet)
             std::fprintf(stderr, "pbrt: %dx%d pixels, %d spp (%s), maxdepth %d, wavelengths: %s\n",
                          fs.pixelBounds.Width(), fs.pixelBounds.Height(),
                          scene->sampler.SamplesPerPixel(), scene->sampler.Description().c_str(),
                          scene->integrator.maxDepth, scene->wavelengths.Description().c_str());
+        Verbose("film " + std::to_string(fs.fullResolution.x) + "x" + std::to_string(fs.fullResolution.y) +
+                ", pixel bounds [" + std::to_string(fs.pixelBounds.pMin.x) + ", " + std::to_string(fs.pixelBounds.pMax.x) +
+                ") x [" + std::to_string(fs.pixelBounds.pMin.y) + ", " + std::to_string(fs.pixelBounds.pMax.y) +
+                "), camera " + scene->camera->Description() + ", output " + outfile);
+
         // Wavelength guiding: the pre-pass and the tables count in the render's time.
         if (opts.wavelengthGuiding && scene->wavelengths.IsTable())
             guide = BuildWavelengthGuide(*scene, guiding, opts.nThreads, opts.quiet);
@@ -385,19 +580,38 @@ int main(int argc, char **argv) {
                          guide->tables.size(), guide->tables.size() == 1 ? "" : "s", guide->kinds.size(),
                          guide->prepassPathsPerTile, guide->tile, guide->tile, guide->cpuSeconds,
                          guide->MemoryBytes());
-        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet, opts.wavelengthRepeats,
+
+        // Passes only when something is done between them (pbrt-v4's waves).
+        std::ofstream mseOut;
+        if (!opts.mseReferenceOut.empty()) mseOut.open(opts.mseReferenceOut);
+        std::function<void(int)> afterPass;
+        if (opts.writePartialImages || mseOut.is_open())
+            afterPass = [&](int sppDone) {
+                if (mseOut.is_open())
+                    mseOut << sppDone << " " << MeanSquaredError(scene->film->GetImage(), *reference) << "\n";
+                if (opts.writePartialImages && sppDone < scene->sampler.SamplesPerPixel()) {
+                    ImageMetadata m;
+                    m.ints["samplesPerPixel"] = sppDone;
+                    scene->film->WriteImage(outfile, m);
+                    Verbose("wrote the partial image " + outfile + " at " + std::to_string(sppDone) + " spp");
+                }
+            };
+        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet, opts.wavelengthRepeats, afterPass,
                                    guide ? &*guide : nullptr);
-        ImageMetadata metadata;
         if (guide) {
             stats.cpuSeconds += guide->cpuSeconds;
             stats.wallSeconds += guide->wallSeconds;
-            metadata = RenderMetadata(*scene, stats);
+        }
+        ImageMetadata metadata = RenderMetadata(*scene, stats);
+        if (guide) {
             AddGuidingMetadata(metadata, *guide);
             WriteGuidingOutputs(outfile, *guide, source);
-        } else {
-            metadata = RenderMetadata(*scene, stats);
         }
+        std::optional<double> mse;
+        if (reference) metadata.floats["MSE"] = float(*(mse = MeanSquaredError(scene->film->GetImage(), *reference)));
         scene->film->WriteImage(outfile, metadata);
+        if (mseOut.is_open() && !mseOut.flush())
+            throw PbrtError(opts.mseReferenceOut + ": cannot write the MSE values");
         if (!opts.quiet)
             std::fprintf(stderr,
                          "pbrt: wrote %s; rendered in %.2f s: %llu paths, %.3f M paths/s, "
@@ -405,8 +619,16 @@ int main(int argc, char **argv) {
                          outfile.c_str(), stats.wallSeconds, (unsigned long long)stats.paths,
                          stats.paths / std::max(stats.wallSeconds, 1e-9) * 1e-6,
                          stats.paths / std::max(stats.cpuSeconds, 1e-9) * 1e-6);
+        if (mse) std::printf("MSE vs %s: %.9g\n", opts.mseReference.c_str(), *mse);
+        if (opts.stats) PrintStats(stats);
+        if (logUtilization)
+            Verbose("utilization: " + std::to_string(stats.cpuSeconds) + " CPU seconds in " +
+                    std::to_string(stats.wallSeconds) + " s (" +
+                    std::to_string(stats.cpuSeconds / std::max(stats.wallSeconds, 1e-9)) + " cores), peak memory " +
+                    std::to_string(PeakMemoryBytes() / 1e6) + " MB");
     } catch (const PbrtError &e) {
         std::fprintf(stderr, "pbrt: %s\n", e.what());
+        if (logFile) std::fprintf(logFile.get(), "pbrt: %s\n", e.what());
         return 1;
     } catch (const std::bad_alloc &) {
         std::fprintf(stderr, "pbrt: out of memory\n");

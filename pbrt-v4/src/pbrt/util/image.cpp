@@ -2,6 +2,8 @@
 // the implementations live in libstb, linked through cmake/stb.cmake) and OpenEXR.
 #include <pbrt/util/image.h>
 
+#include <pbrt/util/output_path.h>
+
 #include <stb_image.h>
 #include <stb_image_write.h>
 
@@ -12,6 +14,7 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfIntAttribute.h>
+#include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
@@ -75,6 +78,8 @@ Image ReadEXR(const std::string &path) {
         Image image;
         image.width = dw.max.x - dw.min.x + 1;
         image.height = dw.max.y - dw.min.y + 1;
+        image.originX = dw.min.x;
+        image.originY = dw.min.y;
         image.channels = int(names.size());
         image.pixels.resize(size_t(image.width) * image.height * image.channels);
         const size_t xStride = sizeof(float) * image.channels;
@@ -137,7 +142,9 @@ Image ReadWithStb(const std::string &path, bool decodeSRGB) {
 }
 
 void CheckImage(const std::string &path, const Image &image) {
-    if (image.width <= 0 || image.height <= 0 || image.channels < 1 || image.channels > 4 ||
+    const bool named = !image.channelNames.empty();
+    if (image.width <= 0 || image.height <= 0 || image.channels < 1 ||
+        (named ? image.channelNames.size() != size_t(image.channels) : image.channels > 4) ||
         image.pixels.size() != size_t(image.width) * image.height * image.channels)
         throw FileError(path, "cannot write an image of " + std::to_string(image.width) + "x" +
                                   std::to_string(image.height) + "x" +
@@ -147,10 +154,20 @@ void CheckImage(const std::string &path, const Image &image) {
 
 void WriteEXR(const std::string &path, const std::string &target, const Image &image,
               const ImageMetadata &metadata) {
-    static const char *const names[4][4] = {
+    static const char *const defaultNames[4][4] = {
         {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
+    std::vector<std::string> names = image.channelNames;
+    if (names.empty())
+        for (int c = 0; c < image.channels; ++c) names.push_back(defaultNames[image.channels - 1][c]);
     try {
-        Imf::Header header(image.width, image.height);
+        // Data window: the image where it lies in the full frame; display window: the frame.
+        const Imath::Box2i dataWindow(Imath::V2i(image.originX, image.originY),
+                                      Imath::V2i(image.originX + image.width - 1, image.originY + image.height - 1));
+        Imath::Box2i displayWindow = dataWindow;
+        if (metadata.fullResolution)
+            displayWindow = Imath::Box2i(Imath::V2i(0, 0), Imath::V2i((*metadata.fullResolution)[0] - 1,
+                                                                      (*metadata.fullResolution)[1] - 1));
+        Imf::Header header(displayWindow, dataWindow);
         header.compression() = Imf::ZIP_COMPRESSION;
         if (const auto &c = metadata.chromaticities) {
             auto v = [](const std::array<float, 2> &xy) { return Imath::V2f(xy[0], xy[1]); };
@@ -161,24 +178,30 @@ void WriteEXR(const std::string &path, const std::string &target, const Image &i
         for (const auto &[name, value] : metadata.float2s)
             header.insert(name, Imf::V2fAttribute(Imath::V2f(value[0], value[1])));
         for (const auto &[name, value] : metadata.strings) header.insert(name, Imf::StringAttribute(value));
+        for (const auto &[name, v] : metadata.matrices)
+            header.insert(name, Imf::M44fAttribute(Imath::M44f(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8],
+                                                               v[9], v[10], v[11], v[12], v[13], v[14], v[15])));
         for (int c = 0; c < image.channels; ++c)
-            header.channels().insert(names[image.channels - 1][c], Imf::Channel(Imf::FLOAT));
+            header.channels().insert(names[size_t(c)], Imf::Channel(Imf::FLOAT));
         const size_t xStride = sizeof(float) * image.channels;
         const size_t yStride = xStride * image.width;
         Imf::FrameBuffer fb;
         for (int c = 0; c < image.channels; ++c)
-            fb.insert(names[image.channels - 1][c],
-                      Imf::Slice(Imf::FLOAT,
-                                 (char *)const_cast<float *>(image.pixels.data() + c), xStride,
-                                 yStride));
+            fb.insert(names[size_t(c)],
+                      Imf::Slice::Make(Imf::FLOAT, const_cast<float *>(image.pixels.data() + c), dataWindow,
+                                       xStride, yStride));
+        // Extra channels share the data window; a name the image already uses would make
+        // OpenEXR silently keep one of the two, so it is an error.
         for (const auto &[name, values] : metadata.channels) {
             if (values.size() != size_t(image.width) * size_t(image.height))
                 throw FileError(target, "channel \"" + name + "\" has " + std::to_string(values.size()) +
                                             " values for " + std::to_string(image.width) + "x" +
                                             std::to_string(image.height) + " pixels");
+            if (std::find(names.begin(), names.end(), name) != names.end())
+                throw FileError(target, "channel \"" + name + "\" is one of the image's own channels");
             header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-            fb.insert(name, Imf::Slice(Imf::FLOAT, (char *)const_cast<float *>(values.data()),
-                                       sizeof(float), sizeof(float) * size_t(image.width)));
+            fb.insert(name, Imf::Slice::Make(Imf::FLOAT, const_cast<float *>(values.data()), dataWindow,
+                                             sizeof(float), sizeof(float) * size_t(image.width)));
         }
         Imf::OutputFile file(path.c_str(), header);
         file.setFrameBuffer(fb);
@@ -223,20 +246,16 @@ void WriteImage(const std::string &path, const Image &image, const ImageMetadata
     std::string ext = LowerExtension(path);
     if (ext != ".exr" && ext != ".png")
         throw FileError(path, "unsupported output image format \"" + ext + "\" (use .exr or .png)");
+    if (ext == ".png" && !image.channelNames.empty())
+        throw FileError(path, "an image with channels " + image.channelNames.front() + ", ... can only be "
+                              "written as EXR");
 
-    // Write beside the target, then rename: a failed write leaves no partial file.
-    std::string tmp = path + ".tmp" + std::to_string(::getpid());
-    try {
-        if (ext == ".exr") WriteEXR(tmp, path, image, metadata);
-        else WritePNG(tmp, path, image);
-    } catch (...) {
-        std::remove(tmp.c_str());
-        throw;
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw FileError(path, "cannot write image file");
-    }
+    // Write beside the target, then rename: a failed write, or a SIGTERM while writing,
+    // leaves no partial file (util/output_path.h).
+    TemporaryOutput tmp(path);
+    if (ext == ".exr") WriteEXR(tmp.Path(), path, image, metadata);
+    else WritePNG(tmp.Path(), path, image);
+    if (!tmp.Commit()) throw FileError(path, "cannot write image file");
 }
 
 }  // namespace pbrt

@@ -14,10 +14,15 @@
 namespace pbrt {
 
 // Pixels stored row by row, top row first, channels interleaved; linear values.
-// Channels: 1 (Y), 2 (Y, A), 3 (R, G, B) or 4 (R, G, B, A).
+// Channels: 1 (Y), 2 (Y, A), 3 (R, G, B) or 4 (R, G, B, A), or any number with their names
+// in channelNames (EXR only: pbrt-v4's "gbuffer" and "spectral" films).
 struct Image {
     int width = 0, height = 0, channels = 0;
     std::vector<float> pixels;
+    std::vector<std::string> channelNames;  // empty: named by the channel count, as above
+    // Where pixel (0, 0) lies in the full frame: the EXR data window's corner (a crop window's
+    // image starts at its pixel bounds' corner, as pbrt-v4 writes it).
+    int originX = 0, originY = 0;
 
     size_t Index(int x, int y, int c) const {
         return (size_t(y) * size_t(width) + size_t(x)) * size_t(channels) + size_t(c);
@@ -50,10 +55,16 @@ struct ImageMetadata {
     // EXR only: further 32-bit float channels by name (such as "wavelengthTable.index"), each
     // width x height values, row by row, top row first.
     std::map<std::string, std::vector<float>> channels;
+    // 4 x 4 matrices (EXR m44f), m[4 i + j] row i, column j, as pbrt-v4 stores its
+    // transformations ("worldToCamera", "worldToNDC").
+    std::map<std::string, std::array<float, 16>> matrices;
+    // The full frame's width and height: the EXR display window (default: the image itself).
+    std::optional<std::array<int, 2>> fullResolution;
 };
 
 // Writes an image; the format comes from the extension:
-//   .exr  32-bit float channels R, G, B (A) or Y (A), ZIP compression, the metadata's attributes
+//   .exr  32-bit float channels R, G, B (A) or Y (A) (or the image's channelNames), ZIP
+//         compression, the metadata's attributes, the data window at the image's origin
 //   .png  8 bits per channel: colour sRGB-encoded, alpha linear, both clamped to [0, 1]
 // The file is written under a temporary name and renamed when complete, so a failed write
 // leaves no partial image. Throws PbrtError naming the file on failure.

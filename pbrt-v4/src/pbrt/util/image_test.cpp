@@ -1,11 +1,14 @@
 #include <pbrt/test_tempdir.h>
 #include <pbrt/util/image.h>
 
+#include <ImfChannelList.h>
 #include <ImfChromaticitiesAttribute.h>
+#include <ImfFrameBuffer.h>
 #include <ImfFloatAttribute.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfIntAttribute.h>
+#include <ImfMatrixAttribute.h>
 #include <ImfStringAttribute.h>
 #include <ImfVecAttribute.h>
 
@@ -279,4 +282,48 @@ TEST(Image, ExrMetadataRoundTripsThroughOpenEXR) {
     Imf::InputFile plain(dir.File("plain.exr").c_str());
     EXPECT_EQ(plain.header().find("chromaticities"), plain.header().end());
     EXPECT_EQ(plain.header().find("samples"), plain.header().end());
+}
+
+// Matrices are stored row by row as EXR m44f (as pbrt-v4 writes worldToCamera and worldToNDC);
+// a crop's image lies at its origin inside the full frame (data window vs display window);
+// named channels are written under their names, and a PNG refuses them.
+TEST(Image, ExrMatricesWindowsAndNamedChannels) {
+    TempDir dir;
+    Image im = RandomImage(4, 3, 5, 0, 1, 11);
+    im.channelNames = {"R", "G", "B", "S0.400,00nm", "S0.500,00nm"};
+    im.originX = 7;
+    im.originY = 2;
+    ImageMetadata m;
+    std::array<float, 16> a;
+    for (size_t i = 0; i < 16; ++i) a[i] = float(i) - 3.5f;
+    m.matrices["worldToCamera"] = a;
+    m.fullResolution = std::array<int, 2>{20, 10};
+    const std::string path = dir.File("crop.exr");
+    WriteImage(path, im, m);
+
+    Imf::InputFile file(path.c_str());
+    const Imf::Header &h = file.header();
+    const auto *mat = h.findTypedAttribute<Imf::M44fAttribute>("worldToCamera");
+    ASSERT_TRUE(mat);
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) EXPECT_EQ(mat->value()[i][j], a[size_t(4 * i + j)]);
+    EXPECT_EQ(h.dataWindow().min, Imath::V2i(7, 2));
+    EXPECT_EQ(h.dataWindow().max, Imath::V2i(10, 4));
+    EXPECT_EQ(h.displayWindow().min, Imath::V2i(0, 0));
+    EXPECT_EQ(h.displayWindow().max, Imath::V2i(19, 9));
+    for (const std::string &n : im.channelNames) EXPECT_TRUE(h.channels().findChannel(n)) << n;
+
+    // Each named channel holds its own values (read back with OpenEXR itself).
+    for (int c = 0; c < im.channels; ++c) {
+        std::vector<float> v(size_t(im.width) * im.height);
+        Imf::FrameBuffer fb;
+        fb.insert(im.channelNames[size_t(c)],
+                  Imf::Slice::Make(Imf::FLOAT, v.data(), h.dataWindow(), sizeof(float), sizeof(float) * im.width));
+        file.setFrameBuffer(fb);
+        file.readPixels(h.dataWindow().min.y, h.dataWindow().max.y);
+        for (int y = 0; y < im.height; ++y)
+            for (int x = 0; x < im.width; ++x) EXPECT_EQ(v[size_t(y * im.width + x)], im.Get(x, y, c));
+    }
+    EXPECT_THROW(WriteImage(dir.File("crop.png"), im), PbrtError);
+    EXPECT_FALSE(std::filesystem::exists(dir.File("crop.png")));
 }

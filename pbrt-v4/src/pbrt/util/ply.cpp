@@ -5,14 +5,14 @@
 // Debian.
 #include <pbrt/util/ply.h>
 
+#include <pbrt/util/file.h>
+
 #include <cctype>
 #include <charconv>
 #include <limits>
 #include <utility>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <iterator>
 #include <sstream>
 
@@ -163,16 +163,13 @@ int VertexSlot(const std::string &n) {
 PlyMesh ReadPly(const std::string &path) {
     auto fail = [&](const std::string &why) { return PbrtError("\"" + path + "\": " + why); };
 
-    // A directory opens as a stream on Linux and reports a nonsense size: refuse it first.
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw fail("is a directory, not a PLY file");
-    if (!std::filesystem::exists(path, ec)) throw fail("no such PLY file");
-    if (!std::filesystem::is_regular_file(path, ec)) throw fail("not a regular file");
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) throw fail("cannot open PLY file");
-    std::string data(size_t(in.tellg()), '\0');
-    in.seekg(0);
-    if (!in.read(data.data(), std::streamsize(data.size()))) throw fail("error reading PLY file");
+    // Regular files only: a directory, device or FIFO is refused before a byte is read.
+    std::string data;
+    try {
+        data = ReadRegularFile(path, "PLY");
+    } catch (const FileReadError &e) {
+        throw fail(e.what());
+    }
     return ParsePly(data, path);
 }
 

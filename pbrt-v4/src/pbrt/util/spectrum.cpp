@@ -8,14 +8,13 @@ extern "C" __m256d _ZGVdN4v_log(__m256d);
 #endif
 
 #include <pbrt/util/cie_data.h>
+#include <pbrt/util/file.h>
 #include <pbrt/util/color.h>
 #include <pbrt/util/wavelength_densities.h>
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -287,11 +286,14 @@ std::shared_ptr<const PiecewiseLinearSpectrum> PiecewiseLinearSpectrum::FromInte
 
 std::shared_ptr<const PiecewiseLinearSpectrum> PiecewiseLinearSpectrum::ReadSPD(
     const std::string &path, bool normalize) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw PbrtError(path + ": is a directory, not a spectrum file");
-    std::ifstream in(path);
-    if (!in) throw PbrtError(path + ": cannot open spectrum file: " + std::strerror(errno));
+    // A regular file of at most 64 MiB (design §3.3): a device or FIFO named as a spectrum
+    // is refused before a byte is read.
+    std::istringstream in;
+    try {
+        in.str(ReadRegularFile(path, "spectrum", kMaxSpectrumFileBytes));
+    } catch (const FileReadError &e) {
+        throw PbrtError(path + ": " + e.what());
+    }
     // Read every number, remembering where it came from for error messages.
     std::vector<Float> numbers;
     std::vector<FileLoc> where;

@@ -74,31 +74,6 @@ void CheckLayout() {
                  "lambda then pdf; the wavelength-pdf patch does not fit this version");
 }
 
-std::string Percent(double f) {
-    std::ostringstream s;
-    s << std::setprecision(3) << 100 * f << "%";
-    return s.str();
-}
-
-std::string Intervals(const std::vector<std::pair<double, double>> &v) {
-    std::ostringstream s;
-    for (size_t i = 0; i < v.size(); ++i) {
-        if (i)
-            s << (i + 1 == v.size() ? " and " : ", ");
-        s << "[" << v[i].first << ", " << v[i].second << "]";
-    }
-    s << " nm";
-    return s.str();
-}
-
-// Emission outside the table's range below these fractions is not worth a warning (the
-// thresholds of the toolkit's pbrt, design §5): a 380..780 nm table misses about 1e-5 of the
-// luminance of a flat lamp; 1e-3 of a tristimulus value is about 0.1 CIEDE2000.
-constexpr double kOutsideLuminanceWarnFraction = 1e-4;
-constexpr double kOutsideTristimulusWarnFraction = 1e-3;
-// Midpoint-rule step [nm]: sees the edges of 5 nm table segments and 1 nm emission lines.
-constexpr double kStep = 0.1;
-
 // Makes `table` the one every camera path samples, on the CPU and (with --gpu) the device.
 void InstallTable(wavelength_table::Table table, const std::string &description) {
     CheckLayout();
@@ -357,72 +332,21 @@ void WarnUnsampledEmission(const std::string &lightName, const ParameterDictiona
     if (!s || (lightName == "infinite" && !params.GetOneString("filename", "").empty()))
         return;  // an image's emission has no single spectrum to check
 
-    const wavelength_table::Table &t = *hostTable;
-    const double lo = t.grid.front(), hi = t.grid.back();
-    const std::vector<std::pair<double, double>> gaps = wavelength_table::ZeroMixtureIntervals(t);
-    double total[3] = {0, 0, 0}, outside[3] = {0, 0, 0}, inGapsY = 0;
-    std::vector<bool> gapEmits(gaps.size(), false);
-    bool emitsBelow = false, emitsAbove = false;
-    const int nSteps = int(std::lround((Lambda_max - Lambda_min) / kStep));
-    for (int i = 0; i < nSteps; ++i) {
-        const double lambda = Lambda_min + (i + 0.5) * kStep;
-        // Upstream's lights hold a DenselySampledSpectrum: the value at the nearest nm.
-        const double e = s(Float(std::lround(lambda)));
-        if (!(e > 0))
-            continue;
-        const Float l = Float(lambda);
-        const double w[3] = {e * Spectra::X()(l), e * Spectra::Y()(l), e * Spectra::Z()(l)};
-        for (int c = 0; c < 3; ++c)
-            total[c] += w[c];
-        if (lambda < lo || lambda > hi) {
-            (lambda < lo ? emitsBelow : emitsAbove) = true;
-            for (int c = 0; c < 3; ++c)
-                outside[c] += w[c];
-            continue;
-        }
-        for (size_t g = 0; g < gaps.size(); ++g)
-            if (lambda > gaps[g].first && lambda < gaps[g].second) {
-                gapEmits[g] = true;
-                inGapsY += w[1];
-            }
-    }
-    if (!(total[1] > 0 || total[0] > 0 || total[2] > 0))
-        return;
-    std::vector<std::pair<double, double>> emittingGaps;
-    for (size_t g = 0; g < gaps.size(); ++g)
-        if (gapEmits[g])
-            emittingGaps.push_back(gaps[g]);
-    const double gapY = total[1] > 0 ? inGapsY / total[1] : 0;
-    const double outsideY = total[1] > 0 ? outside[1] / total[1] : 0;
-    double outsideXYZ = 0;
-    for (int c = 0; c < 3; ++c)
-        if (total[c] > 0)
-            outsideXYZ = std::max(outsideXYZ, outside[c] / total[c]);
-
-    if (!emittingGaps.empty()) {
-        std::ostringstream m;
-        m << "the wavelength sampling density is zero on " << Intervals(emittingGaps)
-          << ", where this light emits (" << Percent(gapY) << " of its luminance): paths "
-          << "never carry those wavelengths, so the image is biased; mix a uniform share into "
-          << "the table with --wavelength-pdf-defensive 0.01 [" << tableDescription << "]";
-        Warning(loc, "%s", m.str());
-    }
-    if ((emitsBelow || emitsAbove) && (outsideY > kOutsideLuminanceWarnFraction ||
-                                       outsideXYZ > kOutsideTristimulusWarnFraction)) {
-        std::vector<std::pair<double, double>> out;
-        if (emitsBelow)
-            out.emplace_back(Lambda_min, lo);
-        if (emitsAbove)
-            out.emplace_back(hi, Lambda_max);
-        std::ostringstream m;
-        m << "this light emits on " << Intervals(out) << ", outside the range of the "
-          << "wavelength table [" << lo << ", " << hi << "] nm, where paths never carry "
-          << "wavelengths: the image misses " << Percent(outsideY) << " of its luminance (up "
-          << "to " << Percent(outsideXYZ) << " of X, Y or Z). --wavelength-pdf-defensive only "
-          << "covers the table's range; extend the table's grid to 360..830 nm ["
-          << tableDescription << "]";
-        Warning(loc, "%s", m.str());
-    }
+    // The measure, thresholds and texts of design §1.5 are the header's (the toolkit's pbrt
+    // warns by the same rule). Upstream's lights hold a DenselySampledSpectrum: the value at
+    // the nearest nanometre.
+    const wavelength_table::Coverage coverage = wavelength_table::MeasureCoverage(
+        *hostTable, [&s](double lambda) { return double(s(Float(std::lround(lambda)))); },
+        [](double lambda, double xyz[3]) {
+            const Float l = Float(lambda);
+            xyz[0] = Spectra::X()(l);
+            xyz[1] = Spectra::Y()(l);
+            xyz[2] = Spectra::Z()(l);
+        });
+    for (const std::string &w : wavelength_table::CoverageWarnings(
+             coverage, "this light", hostTable->grid.front(), hostTable->grid.back(),
+             tableDescription))
+        Warning(loc, "%s", w);
 }
 
 }  // namespace pbrt

@@ -1,0 +1,268 @@
+"""Predicted image error of a wavelength table under a lamp.
+
+The optimizer ranks tables by J (design §4.1), the mean CIEDE2000 of *one* path's colour
+estimate C(u). An image pixel averages N paths, and a low-discrepancy pixel sampler draws the
+N values of u stratified (one per stratum [i/N, (i+1)/N) for a power-of-two N). These
+functions predict the squared CIEDE2000 of a pixel that sees the lamp on a white surface (or
+on given surface colours), so that a benchmark can check whether the ranking of tables by a
+prediction is the ranking of the images it measures (``evaluation.benchmark.predict``).
+
+Each prediction is a function ``(table, spectrum, spp, pixel_sampler, reflectances) ->``
+predicted mean squared CIEDE2000 of the pixel's colour (units: the white surface at Y = 1,
+Lab relative to D65 at Y = 1, as J). Only ratios between tables under the same lamp are
+meant to be compared; every prediction is invariant to the lamp's power (the objective's
+problem scales the target to Y = 1).
+
+- ``J``: today's objective (design §4.1, :func:`wavelength_pdf.objective.J`), squared so that
+  it is in the units of a squared error. It does not know N or the pixel sampler.
+- ``stratified``: E[CIEDE2000(mean of N samples of C(u), c)^2], u stratified over N strata
+  (``sobol``) or independent (``independent``), by Monte Carlo over sample sets drawn from
+  C(u) tabulated on a fine grid of u. ``stratified-de``: E[CIEDE2000]^2, the same in
+  squared units, less driven by rare huge errors.
+- ``covariance``: the covariance of the mean of N samples (per-stratum covariances / N^2,
+  or the whole covariance / N), mapped to Lab by the Jacobian at the target colour and
+  measured by CIEDE2000's local quadratic form there (``covariance-lab``: by plain Lab
+  distance). Linearised, so it is the small-noise limit of ``stratified``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Callable
+
+import numpy as np
+
+from wavelength_pdf.precision import float64
+
+#: Points of the fine u grid on which C(u) is tabulated (midpoints of 2^15 cells): every
+#: power-of-two N up to 4096 divides it, so each stratum holds whole cells. At 2^15, a 1 nm
+#: line under the uniform table (0.0025 of u per wavelength) spans ~80 cells.
+U_POINTS = 2 ** 15
+#: Sample sets of the Monte Carlo of ``stratified`` (its relative standard error is about
+#: sqrt(2 / MC_SETS) for Gaussian-like errors: ~1.6 %).
+MC_SETS = 8192
+PIXEL_SAMPLERS = ("sobol", "independent")
+
+
+@dataclass(frozen=True)
+class PathColours:
+    """C(u) of one table under one lamp on a fine grid of u (midpoints of equal cells).
+
+    Attributes
+    ----------
+    C : (K, U, 3) array
+        XYZ estimate of each colour (K = 1: the white surface) at each u.
+    target : (K, 3) array
+        The exact colours c_k (the white surface has Y = 1).
+    weights : (K,) array
+        Weight of each colour (summing to 1).
+    J : float
+        Today's objective for the table (design §4.1 / §4.5).
+    """
+
+    C: np.ndarray
+    target: np.ndarray
+    weights: np.ndarray
+    J: float
+
+
+#: Tables are given extra grid nodes up to a multiple of this many (see :func:`padded`).
+GRID_CLASS = 512
+
+
+def padded(table, nodes=(), size_class: int = GRID_CLASS):
+    """The same densities on a grid of a multiple of ``size_class`` nodes.
+
+    A piecewise-linear density is unchanged by a node inserted inside a segment with the
+    interpolated value, so this changes no C(u) (J moves by its quadrature's error only:
+    more breakpoints). It lets the objective's compiled functions (one per array shape,
+    ~15 s each) serve every table and lamp of a size class instead of compiling once per
+    table: the nodes inserted first are those the objective adds anyway (``nodes``, the
+    lamp's own, and whole nanometres, the CMFs' grid), so that the objective's union of
+    spectrum, CMF and table nodes is the padded grid itself, the same size for every lamp
+    of the class; then midpoints of the widest segments."""
+    from wavelength_pdf.table import Table
+
+    grid = np.asarray(table.grid, dtype=np.float64)
+    lo, hi = grid[0], grid[-1]
+    extra = np.union1d(np.asarray(nodes, dtype=np.float64), np.arange(np.ceil(lo), np.floor(hi) + 1.0))
+    new = np.union1d(grid, extra[(extra > lo) & (extra < hi)])
+    want = -(-new.size // size_class) * size_class
+    while new.size < want:
+        gaps = np.diff(new)
+        take = np.argsort(-gaps, kind="stable")[: want - new.size]
+        new = np.union1d(new, new[take] + 0.5 * gaps[take])
+    pdfs = np.stack([np.interp(new, grid, p) for p in np.asarray(table.pdfs, dtype=np.float64)])
+    return Table(new, pdfs, list(table.comments))
+
+
+@lru_cache(maxsize=1)
+def _estimate_jit():
+    import jax
+
+    from wavelength_pdf import objective
+
+    # objective.estimate runs op by op (seconds for 2^15 points); the same two steps jitted.
+    def est(arr, P, u):
+        PN, FF = objective._normalized(arr["grid"], P)
+        return objective._table_estimate(arr, PN, FF, u)
+
+    return jax.jit(est)
+
+
+@float64
+def path_colours(table, spectrum, reflectances=None, points: int = U_POINTS) -> PathColours:
+    """Tabulate C(u) of ``table`` (a :class:`~wavelength_pdf.table.Table`) under ``spectrum``
+    with the objective's own estimator (design §1.3) on ``points`` midpoints of u."""
+    import jax.numpy as jnp
+
+    from wavelength_pdf import objective
+
+    objective.enable_compilation_cache()
+    table = padded(table, spectrum.wavelengths)
+    problem = objective.make_problem(spectrum, grid=table.grid, reflectances=reflectances)
+    u = (np.arange(points) + 0.5) / points
+    P = np.asarray(table.pdfs, dtype=np.float64)
+    C = np.asarray(_estimate_jit()(problem.arrays, jnp.asarray(P), jnp.asarray(u)))
+    target = np.asarray(objective.target(problem), dtype=np.float64)
+    if C.ndim == 2:
+        C, target = C[None], target[None]
+    weights = (np.ones(1) if problem.weights is None else np.asarray(problem.weights, dtype=np.float64))
+    return PathColours(C, target, weights, objective.J(problem, P))
+
+
+@lru_cache(maxsize=1)
+def _white_xy() -> np.ndarray:
+    import colour
+
+    from wavelength_pdf.colorimetry import white_d65
+
+    return np.asarray(colour.XYZ_to_xy(white_d65()))
+
+
+def lab(xyz: np.ndarray) -> np.ndarray:
+    """CIELAB of XYZ (white surface Y = 1 scale) relative to D65 at Y = 1, as J's (colour-science)."""
+    import colour
+
+    return np.asarray(colour.XYZ_to_Lab(np.asarray(xyz, dtype=np.float64), _white_xy()))
+
+
+def delta_e2000(lab1: np.ndarray, lab2: np.ndarray) -> np.ndarray:
+    import colour
+
+    return np.asarray(colour.delta_E(lab1, lab2, method="CIE 2000"), dtype=np.float64)
+
+
+def _check(spp: int, pixel_sampler: str, points: int) -> None:
+    if pixel_sampler not in PIXEL_SAMPLERS:
+        raise ValueError(f"pixel sampler must be one of {PIXEL_SAMPLERS}, not {pixel_sampler!r}")
+    if spp < 1 or (pixel_sampler == "sobol" and points % spp):
+        raise ValueError(f"spp {spp} must divide the {points} points of the u grid")
+
+
+def stratified_de2(pc: PathColours, spp: int, pixel_sampler: str = "sobol", sets: int = MC_SETS,
+                   seed: int = 0, power: int = 2) -> float:
+    """Candidate (b): E[CIEDE2000(mean of ``spp`` samples of C(u), c)^2], by Monte Carlo.
+
+    ``sobol``: one u per stratum (a (0,1)-sequence's 1-D projection, which pbrt-v4's Sobol
+    samplers give each dimension at power-of-two spp); ``independent``: u uniform. With
+    ``power=1``, E[CIEDE2000] squared instead: the same up to the spread of the error when it
+    is Gaussian-like, far less driven by rare huge errors (fireflies). A u is one
+    of the fine grid's cells (C at its midpoint): the grid resolves C(u) far finer than a
+    stratum, so this is the continuous draw up to the grid's resolution."""
+    K, U, _ = pc.C.shape
+    _check(spp, pixel_sampler, U)
+    rng = np.random.default_rng(seed)
+    if pixel_sampler == "sobol":
+        cells = U // spp
+        idx = np.arange(spp)[None, :] * cells + rng.integers(0, cells, size=(sets, spp))
+    else:
+        idx = rng.integers(0, U, size=(sets, spp))
+    total = 0.0
+    for k in range(K):
+        mean = pc.C[k][idx].mean(axis=1)  # (sets, 3)
+        de = delta_e2000(lab(mean), lab(pc.target[k])[None, :])
+        total += pc.weights[k] * float(np.mean(de ** power))
+    return total if power == 2 else total ** (2.0 / power)
+
+
+def _lab_jacobian(xyz: np.ndarray) -> np.ndarray:
+    """d Lab / d XYZ at ``xyz`` by central differences (Lab is smooth away from XYZ = 0)."""
+    h = 1e-6 * max(float(np.max(np.abs(xyz))), 1e-12)
+    cols = [(lab(xyz + h * e) - lab(xyz - h * e)) / (2 * h) for e in np.eye(3)]
+    return np.stack(cols, axis=1)
+
+
+def expected_quadratic(lab_c: np.ndarray, cov_lab: np.ndarray, metric: str = "de2000") -> float:
+    """E[d(Lab_c + e, Lab_c)^2] for a zero-mean error e with covariance ``cov_lab``, d taken
+    as its local quadratic form: for q(e) = e' G e, E[q] = sum_i s_i q(v_i) over the
+    eigenpairs (s_i, v_i) of the covariance, so three evaluations of CIEDE2000 along its
+    principal axes give tr(G cov) without forming G (symmetrised over +-v, as CIEDE2000's
+    mean chroma makes it slightly odd)."""
+    s, V = np.linalg.eigh(0.5 * (cov_lab + cov_lab.T))
+    s = np.clip(s, 0.0, None)
+    if metric == "lab":
+        return float(np.sum(s))
+    if metric != "de2000":
+        raise ValueError(f"metric must be 'de2000' or 'lab', not {metric!r}")
+    # A step small against any colour difference, large against rounding (Lab is ~100).
+    eps = 1e-4
+    total = 0.0
+    for si, v in zip(s, V.T):
+        if si == 0.0:
+            continue
+        q = 0.5 * sum(float(delta_e2000(lab_c + sgn * eps * v, lab_c)) ** 2 for sgn in (1.0, -1.0)) / eps ** 2
+        total += si * q
+    return total
+
+
+def mean_covariance(C: np.ndarray, spp: int, pixel_sampler: str = "sobol") -> np.ndarray:
+    """Covariance (3, 3) of the mean of ``spp`` samples of the tabulated C(u) (U, 3): the
+    per-stratum covariances summed over spp^2 (stratified), or the whole covariance over spp."""
+    U = C.shape[0]
+    _check(spp, pixel_sampler, U)
+    if pixel_sampler == "independent":
+        d = C - C.mean(axis=0)
+        return d.T @ d / U / spp
+    S = C.reshape(spp, U // spp, 3)
+    d = S - S.mean(axis=1, keepdims=True)
+    per_stratum = np.einsum("smi,smj->sij", d, d) / S.shape[1]
+    return per_stratum.sum(axis=0) / spp ** 2
+
+
+def covariance_de2(pc: PathColours, spp: int, pixel_sampler: str = "sobol", metric: str = "de2000") -> float:
+    """Candidate (c): the linearised squared error of the mean of ``spp`` samples: its XYZ
+    covariance mapped to Lab by the Jacobian at the target colour, measured by CIEDE2000's
+    local quadratic form (``metric='lab'``: Lab distance)."""
+    total = 0.0
+    for k in range(pc.C.shape[0]):
+        cov = mean_covariance(pc.C[k], spp, pixel_sampler)
+        Jl = _lab_jacobian(pc.target[k])
+        total += pc.weights[k] * expected_quadratic(lab(pc.target[k]), Jl @ cov @ Jl.T, metric)
+    return total
+
+
+def j_squared(pc: PathColours, spp: int, pixel_sampler: str = "sobol") -> float:
+    """Candidate (a): J^2, today's objective (design §4.1) in squared-error units; the same
+    for every spp and pixel sampler (J does not know them)."""
+    return pc.J ** 2
+
+
+#: The candidates by name: each maps (path colours, spp, pixel sampler) to a predicted mean
+#: squared CIEDE2000 of a pixel.
+CANDIDATES: dict[str, Callable[[PathColours, int, str], float]] = {
+    "J": j_squared,
+    "stratified": stratified_de2,
+    "stratified-de": lambda pc, spp, ps="sobol": stratified_de2(pc, spp, ps, power=1),
+    "covariance": covariance_de2,
+    "covariance-lab": lambda pc, spp, ps="sobol": covariance_de2(pc, spp, ps, metric="lab"),
+}
+
+
+def predict(candidate: str, table, spectrum, spp: int, pixel_sampler: str = "sobol",
+            reflectances=None) -> float:
+    """The predicted mean squared CIEDE2000 of a pixel rendered with ``table`` under
+    ``spectrum`` at ``spp`` (one of :data:`CANDIDATES`)."""
+    if candidate not in CANDIDATES:
+        raise ValueError(f"unknown candidate {candidate!r}; one of {', '.join(CANDIDATES)}")
+    return CANDIDATES[candidate](path_colours(table, spectrum, reflectances), spp, pixel_sampler)

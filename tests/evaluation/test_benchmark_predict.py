@@ -1,0 +1,108 @@
+"""Predicted against measured error ratios over a benchmark's jobs: the pipeline on
+a tiny benchmark folder written here (no renders needed), and the script's refusal when the
+benchmark's material is missing."""
+from __future__ import annotations
+
+import importlib.util
+import shutil
+
+import numpy as np
+import pytest
+
+from repo_paths import REPO
+from wavelength_pdf import stratified
+from wavelength_pdf.evaluation.benchmark import predict as BP
+from wavelength_pdf.spectra import load_spectrum
+from wavelength_pdf.table import write_table
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("predict_benchmark", REPO / "scripts" / "predict_benchmark.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _bench(tmp_path):
+    """A benchmark folder with one job (the ColorChecker under CIE FL2, a lamp that needs no
+    shared material) whose optimized table is a copy of its spd table."""
+    lamp = load_spectrum("cie:FL2", 380.0, 780.0)
+    folder = tmp_path / "out" / "tables" / "cie-FL2"
+    folder.mkdir(parents=True)
+    write_table(folder / "uniform.csv", stratified.uniform_table(380.0, 780.0))
+    write_table(folder / "spd.csv", stratified.stratified_table(lamp, "spd", 380.0, 780.0))
+    shutil.copyfile(folder / "spd.csv", folder / "optimized.csv")
+    base = {"job": "colorchecker/cie-FL2/sobol", "scene": "colorchecker", "lamp": "cie-FL2",
+            "pixel_sampler": "sobol"}
+    results = [dict(base, row=row, spp=16, de2=de2)
+               for row, de2 in (("uniform", 3.0), ("spd", 1.1), ("optimized", 1.0), ("floor", 0.5))]
+    return tmp_path / "out", results
+
+
+def test_a_table_against_itself_is_ratio_one_and_uniform_is_worse(tmp_path):
+    out, results = _bench(tmp_path)
+    jobs, missing = BP.plan(results, out, tmp_path / "no-shared")
+    assert missing == [] and len(jobs) == 1
+    recs = BP.predict_jobs(results, jobs, (16,), BP.CANDIDATES)
+    prs = {p["row"]: p for p in BP.pairs(recs, BP.CANDIDATES)}
+    assert set(prs) == {"uniform", "spd"}
+    assert prs["spd"]["measured"] == pytest.approx(1.1) and prs["uniform"]["measured"] == pytest.approx(3.0)
+    for c in BP.CANDIDATES:
+        assert prs["spd"][c] == 1.0, c  # the same table, whatever its file is called
+        assert prs["uniform"][c] > 1.0, c
+
+
+def test_a_missing_table_is_named(tmp_path):
+    out, results = _bench(tmp_path)
+    (out / "tables" / "cie-FL2" / "spd.csv").unlink()
+    _, missing = BP.plan(results, out, tmp_path / "no-shared")
+    assert len(missing) == 1 and "spd.csv" in missing[0]
+
+
+def test_floor_scale_is_fitted_on_the_other_jobs():
+    """Rows whose measured error is exactly 2 x prediction + floor: the scale fitted without
+    each job is 2, and the floored prediction is the measurement; a job that breaks the
+    rule is predicted from the others, not from itself."""
+    recs = []
+    for j, scale in (("a", 2.0), ("b", 2.0), ("c", 2.0), ("d", 50.0)):
+        for row, pred in (("uniform", 3.0), ("optimized", 0.2)):
+            recs.append({"job": j, "scene": "s", "regime": "scenes", "pixel_sampler": "sobol", "spp": 16,
+                         "row": row, "covariance": pred, "floor": 0.1, "de2": scale * pred + 0.1})
+    BP.add_floor(recs, ["covariance"])
+    for r in recs:
+        assert r["covariance+floor"] == pytest.approx(2.0 * r["covariance"] + 0.1), r
+
+
+def test_summary_ranks():
+    rng = np.random.default_rng(0)
+    meas = np.exp(rng.normal(size=40))
+    prs = [{"spp": 64, "row": "uniform", "regime": "scenes" if i % 2 else "colorchecker", "measured": m,
+            "same": m, "reversed": 1.0 / m} for i, m in enumerate(meas)]
+    s = {(x["candidate"], x["regime"]): x for x in BP.summary(prs, ["same", "reversed"])}
+    assert s[("same", "all")]["spearman"] == pytest.approx(1.0) and s[("same", "all")]["log10_median"] == 0.0
+    assert s[("reversed", "scenes")]["spearman"] == pytest.approx(-1.0)
+    assert s[("same", "all")]["pairs"] == 40 and s[("same", "colorchecker")]["pairs"] == 20
+
+
+def test_script_refuses_before_work_when_the_benchmark_is_missing(tmp_path, capsys):
+    code = _script().main(["-o", str(tmp_path / "none"), "--shared", str(tmp_path / "none-shared"),
+                           "--docs", str(tmp_path / "docs"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "no benchmark tables" in err and "no shared material" in err
+    assert not (tmp_path / "docs").exists()
+
+
+def test_script_names_missing_tables(tmp_path, capsys):
+    out, results = _bench(tmp_path)
+    (out / "tables" / "cie-FL2" / "optimized.csv").unlink()
+    import csv
+
+    with open(out / "results.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(results[0]))
+        w.writeheader()
+        w.writerows(results)
+    (tmp_path / "shared").mkdir()
+    code = _script().main(["-o", str(out), "--shared", str(tmp_path / "shared"), "--docs", str(tmp_path / "docs"),
+                           "--quiet"])
+    assert code == 2 and "optimized table" in capsys.readouterr().err
