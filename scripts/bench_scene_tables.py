@@ -25,6 +25,7 @@ from wavelength_pdf.evaluation import metrics, render as rendering
 from wavelength_pdf.evaluation.protocol import WHOLE_SCENE, RenderJob
 from wavelength_pdf.evaluation.scene_edit import edit_scene
 from wavelength_pdf.exr import read_rgb
+from wavelength_pdf.renderer import find_pbrt
 from wavelength_pdf.spectra import load_spectrum
 from wavelength_pdf.table import read_table
 
@@ -45,7 +46,7 @@ def main(argv=None) -> int:
 
     lo, hi = 380.0, 780.0
     w, h = (int(v) for v in args.resolution.lower().split("x"))
-    pbrt = rendering.find_pbrt(args.pbrt)
+    pbrt = find_pbrt(args.pbrt)
     tables = {}
     for item in args.tables:
         name, _, path = item.partition("=")

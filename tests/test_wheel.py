@@ -170,7 +170,7 @@ def test_a_wheel_with_the_renderer_renders_the_shipped_scene(checkout, pbrt, tmp
     assert bundled.read_bytes() == pbrt.read_bytes()
 
     found = _run([str(bin_dir / "python"), "-c",
-                  "from wavelength_pdf.evaluation.render import find_pbrt; print(find_pbrt())"], work, env)
+                  "from wavelength_pdf.renderer import find_pbrt; print(find_pbrt())"], work, env)
     assert found.returncode == 0 and Path(found.stdout.strip()) == bundled, found.stdout + found.stderr[-2000:]
 
     # The shipped scene, through the command's own lookup (no --pbrt, nothing on PATH), tiny.

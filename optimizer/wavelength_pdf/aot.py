@@ -1,7 +1,7 @@
 """Compiled objectives kept on disk as executables, so that a new process skips tracing
 and lowering them.
 
-JAX's persistent compilation cache (``objective.enable_compilation_cache``) saves XLA's
+JAX's persistent compilation cache (``compile_cache.enable_compilation_cache``) saves XLA's
 compilation, but every process still traces each jitted function to a jaxpr, lowers it to
 StableHLO and hashes the module to find it in the cache: for the objective, its gradient
 and the report functions that is 2-3 s of CPU per process, a third of a short
@@ -26,9 +26,10 @@ mode 0600, owned by the user): a file without a valid digest is never unpickled,
 deleted and compiled again.
 
 A compilation cannot be cut short, so a time cap (``optimize --max-seconds``) is kept by not
-starting one that would end past it: inside :func:`compile_deadline`, a call that would have
-to compile raises :class:`CompileWouldOverrun` when less time is left than the longest
-compilation of this process took (``DEFAULT_COMPILE_SECONDS`` before the first).
+starting one that would end past it: a call given a :class:`~wavelength_pdf.budget.Budget`
+(``f(*args, budget=budget)``) that would have to compile raises :class:`CompileWouldOverrun`
+when less time is left before the budget's deadline than the longest compilation of this
+process took (``DEFAULT_COMPILE_SECONDS`` before the first).
 """
 
 from __future__ import annotations
@@ -47,9 +48,12 @@ import time
 from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import jax
+
+if TYPE_CHECKING:
+    from .budget import Budget
 
 _dir: Path | None = None
 _env_keys: dict[bool, str] = {}  # environment_key() by float64 mode
@@ -57,31 +61,18 @@ _env_keys: dict[bool, str] = {}  # environment_key() by float64 mode
 #: What a compilation is expected to take before this process has timed one (seconds; the
 #: search's objective with its gradient takes 2-5 s on one core).
 DEFAULT_COMPILE_SECONDS = 3.0
-_deadline: float | None = None  # time.monotonic() by which a compilation must end
 _compile_seconds: list[float] = []  # the compilations of this process
 
 
 class CompileWouldOverrun(RuntimeError):
-    """A compilation would end past the :func:`compile_deadline`."""
+    """A compilation would end past its budget's deadline."""
 
 
-@contextmanager
-def compile_deadline(deadline: float | None):
-    """Within the block no compilation starts that is expected to end after ``deadline``
-    (a ``time.monotonic()`` value; None: no limit)."""
-    global _deadline
-    old, _deadline = _deadline, deadline
-    try:
-        yield
-    finally:
-        _deadline = old
-
-
-def _may_compile(name: str) -> None:
-    if _deadline is None:
+def _may_compile(name: str, budget: Budget | None) -> None:
+    left = None if budget is None else budget.seconds_left()
+    if left is None:
         return
     expected = max(_compile_seconds, default=DEFAULT_COMPILE_SECONDS)
-    left = _deadline - time.monotonic()
     if left < expected:
         raise CompileWouldOverrun(f"compiling {name} takes about {expected:.1f} s; {max(left, 0.0):.1f} s "
                                   "of the time cap are left")
@@ -284,36 +275,38 @@ class DiskJit:
             sig = None
         return args, static, sig
 
-    def __call__(self, *args, **static):
+    def __call__(self, *args, budget: Budget | None = None, **static):
+        """``jitted(*args, **static)``; a call that has to compile first does so only if
+        ``budget`` leaves time for it (:class:`CompileWouldOverrun` otherwise)."""
         if _dir is None:
-            return self._plain(args, static)
+            return self._plain(args, static, budget)
         args, static, sig = self._split(args, static)
         if sig is None:
             return self.jitted(*args, **static)
         fn = self._compiled.get(sig)
         if fn is None:
-            fn = self._load_or_compile(sig, args, static)
+            fn = self._load_or_compile(sig, args, static, budget)
             self._compiled[sig] = fn
         return fn(*args)
 
-    def bind(self, *args, **static) -> Callable:
+    def bind(self, *args, budget: Budget | None = None, **static) -> Callable:
         """The executable for the signature of ``args`` (and these static arguments), to be
         called with the non-static arguments alone, positionally, on arguments of that same
         signature: a hot loop's calls then skip the signature check of every call (a pytree
         flatten and a string, a tenth of a millisecond on the solvers' objective). Loads or
-        compiles it now, under the deadline like any first call."""
-        self(*args, **static)
+        compiles it now, within ``budget`` like any first call."""
+        self(*args, budget=budget, **static)
         args, static, sig = self._split(args, static)
         if _dir is None or sig is None:
             return partial(self.jitted, **static)
         return self._compiled[sig]
 
-    def _plain(self, args, static):
-        """The jitted function; its first call per signature compiles, under the deadline."""
+    def _plain(self, args, static, budget):
+        """The jitted function; its first call per signature compiles, within ``budget``."""
         args, static, sig = self._split(args, static)
         if sig is None or sig in self._seen:
             return self.jitted(*args, **static)
-        _may_compile(self.name)
+        _may_compile(self.name, budget)
         with _timed_compilation():
             out = jax.block_until_ready(self.jitted(*args, **static))
         self._seen.add(sig)
@@ -333,14 +326,14 @@ class DiskJit:
         jax.block_until_ready(compiled(*args))  # fails here, not later, if it cannot run
         return compiled
 
-    def _load_or_compile(self, sig, args, static):
+    def _load_or_compile(self, sig, args, static, budget):
         path = self._path(sig)
         if path.is_file():
             try:
                 return self._load(path, args)
             except Exception:  # any unreadable or unrunnable file: recompile
                 path.unlink(missing_ok=True)
-        _may_compile(self.name)
+        _may_compile(self.name, budget)
         with _timed_compilation():
             compiled = _compile_fresh(self.jitted.lower(*args, **static))
         try:

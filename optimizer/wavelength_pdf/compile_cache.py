@@ -4,7 +4,7 @@ and how to warm or clear it (design §7; ``wavelength-pdf cache info|clear|warm`
 The first ``optimize`` on a machine compiles the objective, its gradient and the report
 functions for the table's grid size: :data:`FIRST_COMPILE` (measured: 45 s before the first
 evaluation on a busy two-core machine). Later runs on a grid of the same size load the
-compiled code in about a second (``objective.enable_compilation_cache``, ``aot``); another
+compiled code in about a second (:func:`enable_compilation_cache`, ``aot``); another
 spectrum on the same grid compiles nothing. A line lamp whose "auto" grid is refined to
 another size compiles once more for that size.
 
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import stat
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +27,7 @@ from pathlib import Path
 ENV = "WAVELENGTH_PDF_JAX_CACHE"
 #: What the first compilation usually takes, as the progress line says it.
 FIRST_COMPILE = "30-60 s on two cores"
-#: The spectrum :func:`warm` compiles for by default (its "auto" grid is the default 5 nm one).
+#: The spectrum ``cache warm`` compiles for by default (its "auto" grid is the default 5 nm one).
 WARM_SPECTRUM = "cie:FL11"
 
 _OFF = ("", "off", "0", "no")
@@ -149,22 +150,53 @@ def clear(folder: Path | None = None) -> tuple[int, int]:
     return n, freed
 
 
-def warm(spectra: list[str] | None = None, max_evals: int = 30) -> list[str]:
-    """Compile what ``optimize`` needs for each spectrum's grid (default :data:`WARM_SPECTRUM`,
-    whose "auto" grid is the default 5 nm one that most smooth spectra use) by running a short
-    optimization whose table is thrown away. Returns one line per spectrum. (Measured: after
-    ``warm``, a full default ``optimize cie:FL2`` took 10 s in all, against 45-65 s cold; it
-    compiled one small function more.)"""
-    import time
+_cache_dir: str | None = None
 
-    from wavelength_pdf.optimize import optimize_spectrum
-    from wavelength_pdf.spectra import load_spectrum
 
-    lines = []
-    for spec in spectra or [WARM_SPECTRUM]:
-        t = time.monotonic()
-        sp = load_spectrum(spec)
-        result = optimize_spectrum(sp, solver_options={"max_evals": int(max_evals)})
-        del result
-        lines.append(f"{spec}: compiled or loaded in {time.monotonic() - t:.0f} s")
-    return lines
+def enable_compilation_cache() -> str | None:
+    """Keep compiled objectives on disk between runs (JAX's persistent compilation cache).
+
+    Compiling the objective and its gradient takes 5-10 s per problem size; with the
+    cache a later run (another spectrum, another process) loads them in about a second
+    (this module: its place, size and ``clear``; ``cache warm`` fills it).
+    The objective's functions are also kept as whole executables (``aot``), which skips
+    tracing and lowering them in a later process.
+    The directory is ``$WAVELENGTH_PDF_JAX_CACHE`` if set (empty or ``off`` disables the
+    cache), else ``$XDG_CACHE_HOME/wavelength-pdf/jax`` (``~/.cache/...``). The cache only
+    holds compiled code: results do not depend on it. Returns the directory, or None.
+
+    Compiled code from the folder runs in this process, so a folder that another user owns
+    or that group or others may write to is not used (one warning, no cache; design §7); the
+    executables kept by ``aot`` also carry a digest under the user's own key.
+    """
+    global _cache_dir
+    if _cache_dir is not None:
+        return _cache_dir or None
+    import jax
+
+    from wavelength_pdf import aot
+
+    path = cache_dir()  # design §7: the folder, or None when turned off
+    if path is None:
+        _cache_dir = ""
+        return None
+    try:
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+        unsafe = aot.check_cache_folder(path)
+        if unsafe:
+            warnings.warn(f"not using the compile cache {path}: {unsafe}; compiled code there "
+                          "could have been written by someone else (make it yours with "
+                          "chmod 700, or set WAVELENGTH_PDF_JAX_CACHE to another folder)",
+                          RuntimeWarning, stacklevel=2)
+            _cache_dir = ""
+            aot.enable(None)
+            return None
+        jax.config.update("jax_compilation_cache_dir", str(path))
+        aot.enable(path / "executables")
+        # Every compiled function, however quick to compile: a process compiles ~30.
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    except (OSError, AttributeError, ValueError):
+        _cache_dir = ""
+        return None
+    _cache_dir = str(path)
+    return _cache_dir

@@ -29,7 +29,8 @@ import heapq
 
 import numpy as np
 
-from .objective import DEFAULT_GRID, Problem
+from .model import DEFAULT_GRID
+from .problem import Problem
 
 #: Total interpolation error of q on the default grid above which "auto" refines it.
 #: The LSPDD line lamps measure 0.17-0.44; of colour-science's spectra (5 nm lists, so

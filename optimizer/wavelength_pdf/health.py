@@ -27,8 +27,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import aot, objective, sampling
-from .objective import Problem
+from . import aot, objective, quadrature, sampling, uniform
+from .problem import Problem
 
 #: Largest accepted relative bias of the estimator's mean (design §4).
 MAX_BIAS = 1e-6
@@ -138,7 +138,7 @@ def _mean_in_wavelength(arr: dict, P: jax.Array, glx: jax.Array, glw: jax.Array)
     h = b - a
     lam = a[:, None] + h[:, None] * glx[None, :]
     wt = h[:, None] * glw[None, :]
-    f = objective.f_at(arr, lam)  # (n, g, 3)
+    f = quadrature.f_at(arr, lam)  # (n, g, 3)
     PN = jax.vmap(lambda p: sampling.normalize(grid, p))(P)
     pk = jax.vmap(lambda pn: jnp.interp(lam, grid, pn))(PN)  # (4, n, g)
     m = jnp.sum(pk, axis=0)
@@ -156,7 +156,7 @@ _mean_in_wavelength_jit = aot.DiskJit(jax.jit(_mean_in_wavelength), "mean_in_wav
 def health(problem: Problem, P) -> Health:
     """Bias and per-channel relative std of the table P (4, M+1) for ``problem``."""
     P = objective._check_table(problem, P)
-    glx, glw = objective.gauss_legendre(_BIAS_ORDER)
+    glx, glw = quadrature.gauss_legendre(_BIAS_ORDER)
     mean, lost = _mean_in_wavelength_jit(problem.arrays, P, glx, glw)
     c = problem.c
     bias_xyz = _relative(np.asarray(mean) - c, c)
@@ -184,7 +184,7 @@ def _relative(x: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 def uniform_health(problem: Problem) -> Health:
     """Health of stratified uniform sampling (unbiased; std from the u-quadrature)."""
-    _, m1, m2 = objective.uniform_moments(problem)
+    _, m1, m2 = uniform.uniform_moments(problem)
     c = problem.c
     b = _relative(m1 - c, c)
     std = _relative(np.sqrt(np.maximum(m2 - (m1 - c) ** 2, 0.0)), c)

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .model import normalize_density, trapezoid
-from .objective import Problem
+from .problem import Problem
 from .sampling import N_DENSITIES
 
 #: Gauss-Legendre rule exact for the cubic q * hat on each piece.

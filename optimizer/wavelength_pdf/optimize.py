@@ -17,19 +17,21 @@ so that the same input and seed give the same table on any number of cores.
 
 from __future__ import annotations
 
-import importlib.util
-import inspect
 import math
 import time
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from . import aot, grids, health as health_mod, init as init_mod, objective
+from . import grids, health as health_mod, init as init_mod, objective, uniform
+from .budget import Budget
+from .compile_cache import enable_compilation_cache
 from .model import DEFAULT_GRID, normalize_density
 from .precision import float64
+from .problem import Problem, make_problem
+from .quadrature import ORDER_FINE
 from .result import Result
-from .solvers import DEFAULT_SOLVER, SOLVERS, SolverResult
+from .solvers import DEFAULT_SOLVER, SOLVERS, Solver, Start, initialization_result
 from .table import Table
 from .threads import single_threaded_blas
 
@@ -41,42 +43,38 @@ __all__ = ["Result", "optimize_spectrum", "evaluate_table", "evaluation_budget",
            "DEFAULT_GRID", "SOLVERS"]
 
 
+def _solver(name: str) -> Solver:
+    if name not in SOLVERS:
+        raise ValueError(f"unknown solver {name!r}; choose one of: {', '.join(SOLVERS)}")
+    return SOLVERS[name]
+
+
+def _evaluations(solver: Solver, solver_options: dict | None) -> tuple[int, dict]:
+    """The evaluation count (``max_evals`` of the options, else the solver's own) and the
+    solver's other options."""
+    options = dict(solver_options or {})
+    return int(options.pop("max_evals", solver.max_evaluations)), options
+
+
 def evaluation_budget(solver: str = DEFAULT_SOLVER, grid: np.ndarray | str = "auto",
                       solver_options: dict | None = None) -> int:
     """Most objective evaluations :func:`optimize_spectrum` spends (for progress bars)."""
-    if solver not in SOLVERS:
-        raise ValueError(f"unknown solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
-    n = (solver_options or {}).get("max_evals")
-    if n is None:
-        n = inspect.signature(SOLVERS[solver]).parameters["max_evals"].default
-    return int(n)
+    return _evaluations(_solver(solver), solver_options)[0]
 
 
-#: A multistage result with J above this share of stratified uniform sampling's J gets a
-#: second search that keeps ``SECOND_SEARCH_KEEP`` screened starts (the first keeps two) with
-#: ``SECOND_SEARCH_BUDGET`` times the evaluations; the better accepted table of the two is the
-#: result. On a few lamps the start that wins after polishing is the one screening dropped
-#: (LSPDD 2694: 0.054 -> 0.020 x uniform); keeping three starts always would spread the budget
-#: too thin on the others (docs/optimizer-speed.md).
-SECOND_SEARCH_ABOVE = 0.05
-SECOND_SEARCH_KEEP = 3
-SECOND_SEARCH_BUDGET = 1.5
-
-
-def _offset_progress(progress, offset: list):
-    """Progress callback that keeps counting across successive solver runs."""
-    if progress is None:
-        return None
-
-    def report(step: int, J: float) -> None:
-        progress(offset[0] + step, J)
-
-    return report
-
-
-def _auto_grid(spectrum) -> np.ndarray:
-    """The default grid, or for a line lamp the default grid refined around its lines."""
-    return grids.auto_grid(objective.make_problem(spectrum, DEFAULT_GRID), DEFAULT_GRID)
+def _grid_and_problem(spectrum, grid: np.ndarray | str, reflectances) -> tuple[np.ndarray, Problem]:
+    """The table grid and the problem on it. "auto" chooses the grid on the lamp's problem
+    on the default grid (``grids.auto_grid``), which is already the problem to solve when
+    that grid is kept and J has no surface colours (smooth lamps): it is built once."""
+    if isinstance(grid, str):
+        if grid != "auto":
+            raise ValueError(f"grid must be an array of wavelengths or 'auto', not {grid!r}")
+        lamp = make_problem(spectrum, DEFAULT_GRID)
+        grid = grids.auto_grid(lamp, DEFAULT_GRID)
+        if reflectances is None and np.array_equal(grid, DEFAULT_GRID):
+            return grid, lamp
+    grid = np.asarray(grid, dtype=np.float64)
+    return grid, make_problem(spectrum, grid, reflectances)
 
 
 @float64
@@ -120,10 +118,10 @@ def optimize_spectrum(
         judged like any other: it is never accepted when its J is worse than stratified
         uniform sampling's.
     solver_options : dict, optional
-        Extra keyword arguments for the solver (e.g. ``{"max_evals": 300}``). A multistage
-        result above ``SECOND_SEARCH_ABOVE`` x J_uniform is followed by a second search with
-        more starts kept and ``SECOND_SEARCH_BUDGET`` times the budget; the better accepted
-        table wins.
+        Extra keyword arguments for the solver (e.g. ``{"max_evals": 300}``, the evaluation
+        budget). ``multistage`` follows a result above ``solvers.SECOND_SEARCH_ABOVE`` x
+        J_uniform with a second search with more starts kept and
+        ``solvers.SECOND_SEARCH_BUDGET`` times the budget; the better accepted table wins.
     reflectances : wavelength_pdf.reflectances.ReflectanceSet, optional
         Surface colours (design §4.5): J is the weighted mean of every colour's J, and the
         health rules hold for every colour. The grid ("auto") is still chosen for the lamp.
@@ -131,78 +129,41 @@ def optimize_spectrum(
     Raises
     ------
     ValueError
-        Unknown solver, bad grid, or a spectrum without power in the grid range.
+        Unknown solver (or one whose optional package is missing), bad grid, or a spectrum
+        without power in the grid range.
     """
-    if solver not in SOLVERS:
-        raise ValueError(f"unknown solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
-    if solver == "ipopt" and importlib.util.find_spec("cyipopt") is None:
-        raise ValueError("--solver ipopt needs cyipopt, an optional dependency (the ipopt extra): "
-                         "install it with pip install cyipopt (it builds against Ipopt: Debian's "
-                         "coinor-libipopt-dev liblapack-dev libblas-dev pkg-config)")
+    run_solver = _solver(solver)
+    run_solver.check_available()
     t0 = time.monotonic()
     if max_seconds is not None and not (math.isfinite(max_seconds) and max_seconds > 0):
         raise ValueError(f"max_seconds must be a finite number of seconds > 0, got {max_seconds!r}")
-    objective.enable_compilation_cache()
-    auto = isinstance(grid, str)
-    if auto and grid != "auto":
-        raise ValueError(f"grid must be an array of wavelengths or 'auto', not {grid!r}")
-    grid = _auto_grid(spectrum) if auto else np.asarray(grid, dtype=np.float64)
-    problem = objective.make_problem(spectrum, grid, reflectances)
-    P0 = init_mod.equal_mass_partition(problem)
+    max_evaluations, options = _evaluations(run_solver, solver_options)
+    budget = Budget.starting(max_evaluations, max_seconds, t0)
+    enable_compilation_cache()
+    grid, problem = _grid_and_problem(spectrum, grid, reflectances)
     # The reference figures every result reports, before the search: under a time cap
     # their compiling counts against it, and the search gets what is left.
+    P0 = init_mod.equal_mass_partition(problem)
     t_figures = time.monotonic()
-    J_uniform = objective.uniform_J(problem)
-    health_init = health_mod.health(problem, P0)
-    J_init = objective.J(problem, P0)
-    now = time.monotonic()
-    left = None if max_seconds is None else t0 + max_seconds - now
-    offset = [0]
+    start = Start.of(problem, P0)
+    figures_took = time.monotonic() - t_figures
+    left = budget.seconds_left()
     # A compilation cannot be cut short, and the search's (its objective with gradient)
     # takes about as long as these figures' did, cached or not: it only starts if that
     # much time is left, so a cap spent compiling is not overrun by a whole compilation.
-    def search(options: dict, left: float | None) -> SolverResult:
-        try:
-            with single_threaded_blas(), aot.compile_deadline(None if left is None else t0 + max_seconds):
-                return SOLVERS[solver](problem, P0, seed=seed, progress=_offset_progress(progress, offset),
-                                       max_seconds=left, **options)
-        except aot.CompileWouldOverrun as e:  # before the search had a point of its own
-            return SolverResult(P=np.asarray(P0, dtype=np.float64), J=J_init,
-                                message=f"{solver}: stopped by the time cap of {max_seconds:g} s ({e})")
-
-    if left is not None and left <= now - t_figures:
-        run = SolverResult(P=np.asarray(P0, dtype=np.float64), J=J_init,
-                           message=f"{solver}: not started: {max(left, 0.0):.2g} s of the time "
-                                   f"cap of {max_seconds:g} s were left after choosing the grid "
-                                   "and compiling, less than starting the search takes")
+    if left is not None and left <= figures_took:
+        run = initialization_result(start, f"{solver}: not started: {max(left, 0.0):.2g} s of the "
+                                           f"time cap of {max_seconds:g} s were left after choosing "
+                                           "the grid and compiling, less than starting the search takes")
     else:
-        run = search(dict(solver_options or {}), left)
-    history = list(run.history)
-    offset[0] += run.nfev
-    P = normalize_density(grid, run.P)
-    J, J_fine = objective.J_pair(problem, P)
-    health = None  # the result's, when already computed
-    left = None if max_seconds is None else t0 + max_seconds - time.monotonic()
-    if solver == "multistage" and J > SECOND_SEARCH_ABOVE * J_uniform and run.history and (left is None or left > 0):
-        options = dict(solver_options or {})
-        options["max_evals"] = int(SECOND_SEARCH_BUDGET * options.get("max_evals", evaluation_budget(solver)))
-        options["n_keep"] = max(SECOND_SEARCH_KEEP, options.get("n_keep", 0))
-        second = search(options, left)
-        offset[0] += second.nfev
-        P2 = normalize_density(grid, second.P)
-        J2, J2_fine = objective.J_pair(problem, P2)
-        health2 = health_mod.health(problem, P2) if J2 < J else None  # only a better table needs it
-        if health2 is not None and health2.accepted(health_init):
-            history += [min(history[-1], h) for h in second.history]
-            run = SolverResult(P=P2, J=J2, history=history, nfev=run.nfev + second.nfev,
-                               message=f"{second.message} (second search: J above {SECOND_SEARCH_ABOVE:g} x "
-                                       f"uniform after the first, {J / J_uniform:.3g})")
-            P, J, J_fine, health = P2, J2, J2_fine, health2
+        with single_threaded_blas():
+            run = run_solver(start, budget, seed=seed, progress=progress, **options)
     result = Result.judge(
-        Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=J_uniform,
-        J_init=J_init, health=health if health is not None else health_mod.health(problem, P),
-        health_init=health_init, name=getattr(spectrum, "name", ""),
-        source=_source(spectrum, reflectances), solver=solver, seed=seed, history=history,
+        Table(grid=grid.copy(), pdfs=run.P), J=run.J, J_fine=objective.J(problem, run.P, ORDER_FINE),
+        J_uniform=start.J_uniform, J_init=start.J,
+        health=run.health if run.health is not None else health_mod.health(problem, run.P),
+        health_init=start.health, name=getattr(spectrum, "name", ""),
+        source=_source(spectrum, reflectances), solver=solver, seed=seed, history=list(run.history),
         message=run.message)
     result.seconds = time.monotonic() - t0
     return result
@@ -213,8 +174,7 @@ def starting_table(spectrum, *, grid: np.ndarray | str = "auto", reflectances=No
     """The table :func:`optimize_spectrum` starts from for ``spectrum``: the equal-mass
     partition of I (x + y + z) (:func:`wavelength_pdf.init.equal_mass_partition`) on the grid
     the optimizer would choose ("auto") or on ``grid``."""
-    grid = _auto_grid(spectrum) if isinstance(grid, str) else np.asarray(grid, dtype=np.float64)
-    problem = objective.make_problem(spectrum, grid, reflectances)
+    grid, problem = _grid_and_problem(spectrum, grid, reflectances)
     return Table(grid=grid.copy(), pdfs=init_mod.equal_mass_partition(problem),
                  comments=["method: start", f"name: {getattr(spectrum, 'name', '')}",
                            f"source: {_source(spectrum, reflectances)}",
@@ -237,14 +197,14 @@ def evaluate_table(spectrum: Spectrum, table: Table, reflectances: ReflectanceSe
     against the equal-mass initialization on the table's grid (``solver`` is ''); with
     ``reflectances``, over those surface colours (design §4.5)."""
     t0 = time.monotonic()
-    objective.enable_compilation_cache()
+    enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
-    problem = objective.make_problem(spectrum, grid, reflectances)
+    problem = make_problem(spectrum, grid, reflectances)
     P = normalize_density(grid, table.pdfs)
     P0 = init_mod.equal_mass_partition(problem)
     J, J_fine = objective.J_pair(problem, P)
     result = Result.judge(
-        Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=objective.uniform_J(problem),
+        Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=uniform.uniform_J(problem),
         J_init=objective.J(problem, P0), health=health_mod.health(problem, P),
         health_init=health_mod.health(problem, P0), name=getattr(spectrum, "name", ""),
         source=_source(spectrum, reflectances))

@@ -56,16 +56,16 @@ def colour_bar_rows(spectrum: Spectrum, table: Table, init_pdfs: np.ndarray | No
 
     Rows: stratified uniform, initialization (when known), result, target.
     """
-    from wavelength_pdf import objective
+    from wavelength_pdf import objective, uniform
+    from wavelength_pdf.problem import make_problem
 
     grid = np.asarray(table.grid, dtype=np.float64)
-    problem = objective.make_problem(spectrum, grid)
+    problem = make_problem(spectrum, grid)
     u = (np.arange(n_u) + 0.5) / n_u  # pixel centres
     c = np.asarray(objective.target(problem), dtype=np.float64)
     labels, rows = [], []
-    if hasattr(objective, "uniform_estimate"):
-        labels.append("uniform")
-        rows.append(np.asarray(objective.uniform_estimate(problem, u)))
+    labels.append("uniform")
+    rows.append(np.asarray(uniform.uniform_estimate(problem, u)))
     if init_pdfs is None:
         init_pdfs = _init_pdfs(problem)
     if init_pdfs is not None:

@@ -2,7 +2,7 @@
 
 The objective of design §4.1 scores one lamp seen on a white surface. With a set of surface
 colours R_1 .. R_K, J becomes the weighted mean over k of J with f = I * R_k * cmf
-(:func:`wavelength_pdf.objective.make_problem` with ``reflectances=``). A set is named by
+(:func:`wavelength_pdf.problem.make_problem` with ``reflectances=``). A set is named by
 
 - ``colorchecker`` -- the 24 patches of the ColorChecker as colour-science ships them
   (``colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]``, 380-780 nm in 5 nm steps);

@@ -389,7 +389,7 @@ def renderer_output(scene: Path, flag: str, filename: str, what: str,
     import subprocess
     import tempfile
 
-    from wavelength_pdf.evaluation.render import find_pbrt
+    from wavelength_pdf.renderer import find_pbrt
 
     if not scene.is_file():
         raise SpectrumError(f"{scene}: no such scene file" if not scene.exists()
@@ -425,7 +425,7 @@ def whole_scene_spectrum(path: str | Path, lo: float = 380.0, hi: float = 780.0,
         The scene is missing, the renderer refuses it (a scene with no emitters, a syntax
         error: its message, naming file and line), or the total has no energy in
         ``[lo, hi]``.
-    wavelength_pdf.evaluation.render.RendererNotFound
+    wavelength_pdf.renderer.RendererNotFound
         No renderer.
     """
     scene = Path(path)

@@ -1,5 +1,11 @@
 """Solvers that minimize J over the four densities, chosen by name from ``SOLVERS``.
 
+Every solver is called the same way, ``SOLVERS[name](start, budget, seed=..., progress=...,
+**options)``: ``start`` (:class:`Start`) is the problem with its initialization and the
+figures the optimizer computed for it once (its J and health, stratified uniform sampling's
+J), ``budget`` (:class:`~wavelength_pdf.budget.Budget`) what the run may spend. What a solver
+needs beyond that (an optional package) its registry entry (:class:`Solver`) says.
+
 Every solver minimizes the same function of a parameter vector x:
 
     J(P(x)) + mu * sum_c max(0, var_c(P(x)) / var_c(P_init) - (1 - margin))^2
@@ -18,7 +24,7 @@ Every solver minimizes the same function of a parameter vector x:
 
   On a coarse level of ``multistage`` the reference is the initialization on that
   level's grid (a coarse grid cannot follow emission lines).
-- The search runs on ``objective.simplify(problem, SEARCH_TOL)``; tables are judged on
+- The search runs on ``problem.simplify(problem, SEARCH_TOL)``; tables are judged on
   the exact problem.
 
 The value and its gradient with respect to the parameters come from one executable per
@@ -28,16 +34,17 @@ objective and the gradient pulled back, in one call and one transfer per evaluat
 level's parameters are padded to the table grid's count, so the levels share it.
 SciPy and Ipopt see float64 NumPy arrays.
 
-Solvers are deterministic for the same input and seed, as long as ``max_seconds`` does not
-cut a run short (the evaluation budget is what normally stops them). ``max_seconds`` counts
-from the solver's call, including the compiling of its objective: the clock is read before
-every evaluation and before every stage (a stage that cannot start is skipped, not compiled),
-so a run ends at most one evaluation, or one compilation already under way, after the cap.
+Solvers are deterministic for the same input and seed, as long as the budget's deadline does
+not cut a run short (the evaluation count is what normally stops them). The deadline covers
+the compiling of the solver's objective too: the clock is read before every evaluation and
+before every stage (a stage that cannot start is skipped, not compiled), and no compilation
+starts that would end past it (``aot``), so a run ends at most one evaluation after the cap.
 """
 
 from __future__ import annotations
 
-import time
+import dataclasses
+import importlib.util
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Callable
@@ -50,8 +57,11 @@ import scipy.optimize
 from . import aot
 from . import health as health_mod
 from . import init as init_mod
-from . import objective
-from .objective import Problem
+from . import objective, quadrature, uniform
+from . import problem as problem_mod
+from .budget import Budget
+from .model import normalize_density
+from .problem import Problem
 from .sampling import N_DENSITIES
 
 #: Share of the support density mixed into every density (keeps the mixture positive
@@ -65,7 +75,7 @@ PENALTY_MARGIN = 0.05
 #: Default weight of the variance penalty, relative to J of the initialization.
 PENALTY_WEIGHT = 10.0
 
-#: Solvers search on ``objective.simplify(problem, SEARCH_TOL)`` (spectrum and CMFs on
+#: Solvers search on ``problem.simplify(problem, SEARCH_TOL)`` (spectrum and CMFs on
 #: fewer nodes: about half the work per evaluation) and judge results on the exact
 #: problem. 0 searches on the exact problem.
 SEARCH_TOL = 1e-3
@@ -75,6 +85,40 @@ SEARCH_TOL = 1e-3
 FIRST_SHARE = 0.5
 
 Progress = Callable[[int, float], None]
+
+
+@dataclass(frozen=True)
+class Start:
+    """The problem, the table the search starts from, and the figures of that table that the
+    optimizer reports anyway (computed once, by :meth:`of`; the solvers judge against them).
+
+    Attributes
+    ----------
+    problem : Problem
+        The exact problem (tables are judged on it).
+    P : (4, M+1) array
+        The initialization (the equal-mass partition).
+    health : health.Health
+        Its health: no accepted table may be worse (``Health.accepted``).
+    J : float
+        Its J at ``quadrature.ORDER``.
+    J_uniform : float
+        J of stratified uniform sampling at ``quadrature.ORDER``.
+    """
+
+    problem: Problem
+    P: np.ndarray
+    health: health_mod.Health
+    J: float
+    J_uniform: float
+
+    @classmethod
+    def of(cls, problem: Problem, P: np.ndarray) -> Start:
+        """The start at ``P``, its figures computed (what the optimizer reports: stratified
+        uniform sampling's J first, then the table's health and J)."""
+        J_uniform = uniform.uniform_J(problem)
+        health = health_mod.health(problem, P)
+        return cls(problem, P, health, objective.J(problem, P), J_uniform)
 
 
 @dataclass
@@ -93,6 +137,8 @@ class SolverResult:
         Number of value-and-gradient evaluations.
     message : str
         What stopped the solver, and which stage or start won.
+    health : health.Health or None
+        The health of ``P`` on the exact problem when the solver already computed it.
     """
 
     P: np.ndarray
@@ -100,6 +146,19 @@ class SolverResult:
     history: list[float] = field(default_factory=list)
     nfev: int = 0
     message: str = ""
+    health: health_mod.Health | None = None
+
+
+def _written(problem: Problem, P: np.ndarray) -> np.ndarray:
+    """The table as it is written: every row scaled to integrate to 1 by the trapezoid rule
+    (the rule ``optimize`` applies to the tables it scores, so J here is J there)."""
+    return normalize_density(problem.grid, P)
+
+
+def initialization_result(start: Start, message: str) -> SolverResult:
+    """The result of a run that found nothing: the initialization, as it is written."""
+    P = _written(start.problem, start.P)
+    return SolverResult(P=P, J=objective.J(start.problem, P), message=message)
 
 
 def _put(x) -> jax.Array:
@@ -233,22 +292,22 @@ def make_level(table_grid: np.ndarray, support: np.ndarray, stride: int) -> Leve
 class _Context:
     """Problem data, the penalty reference, the budget and the best point seen."""
 
-    def __init__(self, problem: Problem, P_init: np.ndarray, progress: Progress | None,
-                 max_evals: int, max_seconds: float | None, penalty_weight: float = PENALTY_WEIGHT,
-                 search_tol: float | None = None, search_order: int | None = None):
-        # The clock starts before the first compilation (health, variance, J_init below).
-        self.deadline = None if max_seconds is None else time.monotonic() + max_seconds
+    def __init__(self, start: Start, budget: Budget, progress: Progress | None,
+                 penalty_weight: float = PENALTY_WEIGHT, search_tol: float | None = None,
+                 search_order: int | None = None):
+        problem, P_init = start.problem, start.P
+        self.budget = budget
         self.timed_out = False
         self.problem = problem
-        self.search = objective.simplify(problem, SEARCH_TOL if search_tol is None else search_tol)
+        self.search = problem_mod.simplify(problem, SEARCH_TOL if search_tol is None else search_tol)
         self.arr = self.search.arrays
-        self.order = objective.SEARCH_ORDER if search_order is None else search_order
-        self.glx, self.glw = objective.gauss_legendre(self.order)
+        self.order = quadrature.SEARCH_ORDER if search_order is None else search_order
+        self.glx, self.glw = quadrature.gauss_legendre(self.order)
         s = init_mod.support_density(problem)
         self.s = jax.device_put(s)
         self.support = s > 0
         self.dg = jax.device_put(np.diff(problem.grid))
-        self.health_init = health_mod.health(problem, P_init)
+        self.health_init = start.health
         self.fine = make_level(problem.grid, self.support, 1)
         self._jlevels: dict[int, tuple] = {}
         self._padded: dict[int, tuple] = {}
@@ -260,7 +319,8 @@ class _Context:
         self._var_refs: dict[int, jax.Array] = {1: self.var_ref}
         self.mu = float(penalty_weight * max(self.J_init, 1e-3))
         self.progress = progress
-        self.max_evals = max_evals
+        # A count of its own: a repair run (``_best_accepted``) extends it.
+        self.max_evals = budget.max_evaluations
         self.nfev = 0
         self.history: list[float] = []
         self.best_J = np.inf
@@ -297,7 +357,7 @@ class _Context:
                 PENALTY_MARGIN)
         exe = self._exes.get(name)
         if exe is None:
-            exe = self._exes[name] = _penalized_in.bind(*args, name=name)
+            exe = self._exes[name] = _penalized_in.bind(*args, name=name, budget=self.budget)
         out = np.asarray(exe(*args), dtype=np.float64)
         k = self.search.c.size
         m1 = out[2:2 + k].reshape(self.search.c.shape)
@@ -325,17 +385,17 @@ class _Context:
     def out_of_budget(self) -> bool:
         if self.nfev >= self.max_evals:
             return True
-        if self.deadline is not None and time.monotonic() > self.deadline:
+        if self.budget.expired():
             self.timed_out = True
         return self.timed_out
 
     def table(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
         E, mask = self._j(level)
-        return np.asarray(_to_P(_put(x), E, self.s, mask, self.dg, name))
+        return np.asarray(_to_P(_put(x), E, self.s, mask, self.dg, name, budget=self.budget))
 
     def values(self, x: np.ndarray, level: Level, name: str) -> np.ndarray:
         E, mask = self._j(level)
-        return np.asarray(_to_V(_put(x), E, self.s, mask, self.dg, name))
+        return np.asarray(_to_V(_put(x), E, self.s, mask, self.dg, name, budget=self.budget))
 
     def bounds(self, level: Level, name: str):
         if not PARAMETERIZATIONS[name].bounded:
@@ -443,39 +503,39 @@ def _table_of(ctx: _Context, pt: _Point) -> np.ndarray:
 def _finish(ctx: _Context, P: np.ndarray, message: str) -> SolverResult:
     if ctx.timed_out:
         message += "; stopped by the time cap"
+    P = _written(ctx.problem, P)
     return SolverResult(P=P, J=objective.J(ctx.problem, P), history=list(ctx.history),
                         nfev=ctx.nfev, message=message)
 
 
-def lbfgsb(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
-           max_seconds: float | None = None, max_evals: int = 900, parameterization: str = "logits") -> SolverResult:
+def lbfgsb(start: Start, budget: Budget, *, seed: int = 0, progress: Progress | None = None,
+           parameterization: str = "logits") -> SolverResult:
     """SciPy L-BFGS-B from the initialization on the table grid, in one parameterization
     (``logits``: unconstrained softmax; ``values``: bounds v >= 0)."""
-    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
-    pt = _run_scipy(ctx, _start(ctx, P0), ctx.fine, parameterization, "L-BFGS-B", max_evals)
+    ctx = _Context(start, budget, progress)
+    pt = _run_scipy(ctx, _start(ctx, start.P), ctx.fine, parameterization, "L-BFGS-B", budget.max_evaluations)
     return _finish(ctx, _table_of(ctx, pt), f"lbfgsb/{parameterization}: {ctx.nfev} evaluations")
 
 
-def trust_constr(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
-                 max_seconds: float | None = None, max_evals: int = 400) -> SolverResult:
+def trust_constr(start: Start, budget: Budget, *, seed: int = 0, progress: Progress | None = None) -> SolverResult:
     """SciPy trust-constr (trust-region SQP with a BFGS Hessian) in the logits
     parameterization, which needs no bounds (its interior-point mode for the bounds of
     the values parameterization barely moves within a practical budget)."""
-    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
-    pt = _run_scipy(ctx, _start(ctx, P0), ctx.fine, "logits", "trust-constr", max_evals)
+    ctx = _Context(start, budget, progress)
+    pt = _run_scipy(ctx, _start(ctx, start.P), ctx.fine, "logits", "trust-constr", budget.max_evaluations)
     return _finish(ctx, _table_of(ctx, pt), f"trust-constr: {ctx.nfev} evaluations")
 
 
-def ipopt(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
-          max_seconds: float | None = None, max_evals: int = 900) -> SolverResult:
+def ipopt(start: Start, budget: Budget, *, seed: int = 0, progress: Progress | None = None) -> SolverResult:
     """Ipopt (cyipopt, MUMPS linear solver, limited-memory Hessian) with bounds v >= 0.
 
-    Searches with ``objective.ORDER`` points per u-piece, not the midpoint rule of the
+    Searches with ``quadrature.ORDER`` points per u-piece, not the midpoint rule of the
     other solvers: Ipopt's filter line search stalls on the midpoint rule's small kinks
     (on the test lamp it made no progress in 40 evaluations)."""
     import cyipopt
 
-    ctx = _Context(problem, P0, progress, max_evals, max_seconds, search_order=objective.ORDER)
+    P0, max_evals = start.P, budget.max_evaluations
+    ctx = _Context(start, budget, progress, search_order=quadrature.ORDER)
     level = ctx.fine
     x0 = PARAMETERIZATIONS["values"].from_V(np.asarray(P0), level.mask)
     tracker = _Tracker()
@@ -495,12 +555,51 @@ def ipopt(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress
     return _finish(ctx, P, f"ipopt: {message}")
 
 
-def multistage(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Progress | None = None,
-               max_seconds: float | None = None, max_evals: int = 1000, strides: tuple[int, ...] = (4, 1),
-               screen_iters: int = 60, n_random: int = 0, n_keep: int = 2, coarse_iters: int = 150,
-               stage_iters: int = 150, starts: tuple[str, ...] = ("quarters", "windows"),
-               fine_starts: tuple[str, ...] = ("equal-mass",), first_share: float = FIRST_SHARE
-               ) -> SolverResult:
+#: A multistage result with J above this share of stratified uniform sampling's J gets a
+#: second search that keeps ``SECOND_SEARCH_KEEP`` screened starts (the first keeps two) with
+#: ``SECOND_SEARCH_BUDGET`` times the evaluations; the better accepted table of the two is the
+#: result. On a few lamps the start that wins after polishing is the one screening dropped
+#: (LSPDD 2694: 0.054 -> 0.020 x uniform); keeping three starts always would spread the budget
+#: too thin on the others (docs/optimizer-speed.md).
+SECOND_SEARCH_ABOVE = 0.05
+SECOND_SEARCH_KEEP = 3
+SECOND_SEARCH_BUDGET = 1.5
+
+
+def _counting_on(progress: Progress | None, offset: int) -> Progress | None:
+    """Progress callback of a later run that keeps counting after ``offset`` evaluations."""
+    if progress is None:
+        return None
+    return lambda step, J: progress(offset + step, J)
+
+
+def multistage(start: Start, budget: Budget, *, seed: int = 0, progress: Progress | None = None,
+               n_keep: int = 2, **options) -> SolverResult:
+    """:func:`multistage_once`; a result above ``SECOND_SEARCH_ABOVE`` x J_uniform is
+    followed by a second search with at least ``SECOND_SEARCH_KEEP`` starts kept and
+    ``SECOND_SEARCH_BUDGET`` times the evaluations (the same deadline), whose table replaces
+    the first only if its J is lower and it is accepted."""
+    first = multistage_once(start, budget, seed=seed, progress=progress, n_keep=n_keep, **options)
+    if not (first.J > SECOND_SEARCH_ABOVE * start.J_uniform and first.history and not budget.expired()):
+        return first
+    more = budget.with_evaluations(int(SECOND_SEARCH_BUDGET * budget.max_evaluations))
+    second = multistage_once(start, more, seed=seed, progress=_counting_on(progress, first.nfev),
+                             n_keep=max(SECOND_SEARCH_KEEP, n_keep), **options)
+    health = health_mod.health(start.problem, second.P) if second.J < first.J else None  # only a better table needs it
+    if health is None or not health.accepted(start.health):
+        return dataclasses.replace(first, nfev=first.nfev + second.nfev)
+    history = first.history + [min(first.history[-1], h) for h in second.history]
+    return SolverResult(P=second.P, J=second.J, history=history, nfev=first.nfev + second.nfev,
+                        message=f"{second.message} (second search: J above {SECOND_SEARCH_ABOVE:g} x "
+                                f"uniform after the first, {first.J / start.J_uniform:.3g})", health=health)
+
+
+def multistage_once(start: Start, budget: Budget, *, seed: int = 0, progress: Progress | None = None,
+                    strides: tuple[int, ...] = (4, 1), screen_iters: int = 60, n_random: int = 0,
+                    n_keep: int = 2, coarse_iters: int = 150, stage_iters: int = 150,
+                    starts: tuple[str, ...] = ("quarters", "windows"),
+                    fine_starts: tuple[str, ...] = ("equal-mass",), first_share: float = FIRST_SHARE
+                    ) -> SolverResult:
     """Multi-start, multi-level, multi-parameterization L-BFGS-B; keeps the best accepted.
 
     1. Screen on the coarsest level (every ``strides[0]``-th table node): a short run in
@@ -519,7 +618,8 @@ def multistage(problem: Problem, P0: np.ndarray, *, seed: int = 0, progress: Pro
     4. Return the lowest-J table among them that the health check accepts (unbiased, no
        channel's std above the initialization's); the initialization itself if none is.
     """
-    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
+    problem, P0, max_evals = start.problem, start.P, budget.max_evaluations
+    ctx = _Context(start, budget, progress)
     levels = [ctx.level(k) for k in strides if k >= 1 and (k == 1 or problem.grid.size > 4 * k)]
     if not levels or levels[-1].stride != 1:
         levels.append(ctx.fine)
@@ -628,23 +728,58 @@ def _best_accepted(ctx: _Context, finalists: list, P0: np.ndarray, who: str) -> 
                    "returning the initialization")
 
 
-def polish(problem: Problem, P_start: np.ndarray, P0: np.ndarray, *, progress: Progress | None = None,
-           max_seconds: float | None = None, max_evals: int = 600, stage_iters: int = 100) -> SolverResult:
-    """Continue from the table ``P_start`` on the problem's grid (e.g. a solution from a
-    coarser grid, interpolated): the table-grid stage of ``multistage`` alone. ``P0`` is
+def polish(start: Start, P_from: np.ndarray, budget: Budget, *, progress: Progress | None = None,
+           stage_iters: int = 100) -> SolverResult:
+    """Continue from the table ``P_from`` on the problem's grid (e.g. a solution from a
+    coarser grid, interpolated): the table-grid stage of ``multistage`` alone. ``start`` is
     the initialization the health check compares with."""
-    ctx = _Context(problem, P0, progress, max_evals, max_seconds)
-    start = _Point(V=np.asarray(P_start, dtype=np.float64), level=ctx.fine, name="previous")
-    return _best_accepted(ctx, [_alternate(ctx, start, ctx.fine, max_evals, stage_iters)], P0, "polish")
+    ctx = _Context(start, budget, progress)
+    pt = _Point(V=np.asarray(P_from, dtype=np.float64), level=ctx.fine, name="previous")
+    return _best_accepted(ctx, [_alternate(ctx, pt, ctx.fine, budget.max_evaluations, stage_iters)],
+                          start.P, "polish")
+
+
+@dataclass(frozen=True)
+class Solver:
+    """A registry entry: how to run a solver, and what it needs.
+
+    ``run(start, budget, seed=..., progress=..., **options)`` does the work;
+    ``max_evaluations`` is its evaluation count when none is given; ``requires`` names an
+    optional package it imports (``install`` says how to get it). Calling the entry runs
+    the solver within its budget: a compilation that would end past the deadline stops it
+    before it found a point of its own, and the initialization is the result.
+    """
+
+    name: str
+    run: Callable[..., SolverResult]
+    max_evaluations: int
+    requires: str = ""
+    install: str = ""
+
+    def check_available(self) -> None:
+        """Raise ValueError, saying how to install it, when a package it needs is missing."""
+        if self.requires and importlib.util.find_spec(self.requires) is None:
+            raise ValueError(f"--solver {self.name} needs {self.requires}, an optional dependency "
+                             f"{self.install}")
+
+    def __call__(self, start: Start, budget: Budget | None = None, **options) -> SolverResult:
+        budget = Budget(self.max_evaluations) if budget is None else budget
+        try:
+            return self.run(start, budget, **options)
+        except aot.CompileWouldOverrun as e:  # before the search had a point of its own
+            return initialization_result(start, f"{self.name}: stopped by the time cap of "
+                                                f"{budget.seconds:g} s ({e})")
 
 
 #: Solvers by name (``--solver`` on the command line).
-SOLVERS: dict[str, Callable[..., SolverResult]] = {
-    "multistage": multistage,
-    "lbfgsb": lbfgsb,
-    "trust-constr": trust_constr,
-    "ipopt": ipopt,
-}
+SOLVERS: dict[str, Solver] = {s.name: s for s in (
+    Solver("multistage", multistage, 1000),
+    Solver("lbfgsb", lbfgsb, 900),
+    Solver("trust-constr", trust_constr, 400),
+    Solver("ipopt", ipopt, 900, requires="cyipopt", install=(
+        "(the ipopt extra): install it with pip install cyipopt (it builds against Ipopt: Debian's "
+        "coinor-libipopt-dev liblapack-dev libblas-dev pkg-config)")),
+)}
 
 #: The solver used when none is named.
 DEFAULT_SOLVER = "multistage"

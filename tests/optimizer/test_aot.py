@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from wavelength_pdf import aot
+from wavelength_pdf.budget import Budget
 from wavelength_pdf.precision import float64
 
 
@@ -110,14 +111,16 @@ def test_no_compilation_starts_that_would_end_past_the_deadline(on_disk, tmp_pat
 
     f = aot.disk_jit(triple_plus_one)
     x = jnp.arange(5.0)
-    with aot.compile_deadline(time.monotonic() + 0.5 * aot.DEFAULT_COMPILE_SECONDS):
-        with pytest.raises(aot.CompileWouldOverrun, match="time cap"):
-            f(x)
+    short = Budget(1, time.monotonic() + 0.5 * aot.DEFAULT_COMPILE_SECONDS)
+    with pytest.raises(aot.CompileWouldOverrun, match="time cap"):
+        f(x, budget=short)
     np.testing.assert_array_equal(np.asarray(f(x)), 3.0 * np.arange(5.0) + 1.0)  # no deadline
-    with aot.compile_deadline(time.monotonic() - 1.0):  # already past: nothing new compiles
-        np.testing.assert_array_equal(np.asarray(f(x)), 3.0 * np.arange(5.0) + 1.0)
-        with pytest.raises(aot.CompileWouldOverrun):
-            f(jnp.arange(6.0))  # another shape: another compilation
+    past = Budget(1, time.monotonic() - 1.0)  # already past: nothing new compiles
+    np.testing.assert_array_equal(np.asarray(f(x, budget=past)), 3.0 * np.arange(5.0) + 1.0)
+    with pytest.raises(aot.CompileWouldOverrun):
+        f(jnp.arange(6.0), budget=past)  # another shape: another compilation
+    with pytest.raises(aot.CompileWouldOverrun):
+        f.bind(jnp.arange(7.0), budget=past)  # binding compiles within the budget too
 
 
 # --- what the cache folder may hold (design §7) -------------------------------------------
@@ -160,27 +163,27 @@ def test_planted_file_is_never_unpickled(cache_dir, tmp_path):
 
 @pytest.fixture
 def restore_compilation_cache():
-    from wavelength_pdf import objective
+    from wavelength_pdf import compile_cache
 
-    saved = (objective._cache_dir, aot._dir, jax.config.jax_compilation_cache_dir)
-    objective._cache_dir = None
-    yield objective
-    objective._cache_dir, aot._dir = saved[0], saved[1]
+    saved = (compile_cache._cache_dir, aot._dir, jax.config.jax_compilation_cache_dir)
+    compile_cache._cache_dir = None
+    yield compile_cache
+    compile_cache._cache_dir, aot._dir = saved[0], saved[1]
     jax.config.update("jax_compilation_cache_dir", saved[2])
 
 
 def test_cache_folder_others_may_write_is_not_used(tmp_path, monkeypatch, restore_compilation_cache):
-    objective = restore_compilation_cache
+    compile_cache = restore_compilation_cache
     folder = tmp_path / "shared-cache"
     folder.mkdir()
     folder.chmod(0o777)
     monkeypatch.setenv("WAVELENGTH_PDF_JAX_CACHE", str(folder))
     with pytest.warns(RuntimeWarning, match="others may write in it"):
-        assert objective.enable_compilation_cache() is None
+        assert compile_cache.enable_compilation_cache() is None
     assert aot._dir is None
     assert jax.config.jax_compilation_cache_dir != str(folder)
     assert list(folder.iterdir()) == []
-    assert objective.enable_compilation_cache() is None  # one warning: decided once
+    assert compile_cache.enable_compilation_cache() is None  # one warning: decided once
 
 
 def test_cache_folder_of_another_user_is_not_used(tmp_path, monkeypatch, restore_compilation_cache):
@@ -188,13 +191,13 @@ def test_cache_folder_of_another_user_is_not_used(tmp_path, monkeypatch, restore
 
     if os.geteuid() != 0:
         pytest.skip("needs root to give a folder to another user")
-    objective = restore_compilation_cache
+    compile_cache = restore_compilation_cache
     folder = tmp_path / "their-cache"
     folder.mkdir(mode=0o700)
     os.chown(folder, 65534, 65534)
     monkeypatch.setenv("WAVELENGTH_PDF_JAX_CACHE", str(folder))
     with pytest.warns(RuntimeWarning, match="belongs to another user"):
-        assert objective.enable_compilation_cache() is None
+        assert compile_cache.enable_compilation_cache() is None
     assert aot._dir is None and list(folder.iterdir()) == []
     # aot refuses such a folder by itself too.
     aot.enable(folder)

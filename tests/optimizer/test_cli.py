@@ -34,7 +34,8 @@ def _fake_optimizer(monkeypatch, accepted: bool = True) -> list:
     ``evaluate_table`` (so the record, its acceptance and its header are the real ones);
     ``accepted=False`` scores a table that drops every density below 500 nm (biased).
     Returns the list of spectra it saw."""
-    from wavelength_pdf import init, objective, optimize
+    from wavelength_pdf import init, optimize
+    from wavelength_pdf.problem import make_problem
 
     calls: list = []
 
@@ -43,7 +44,7 @@ def _fake_optimizer(monkeypatch, accepted: bool = True) -> list:
         calls.append(spectrum.name)
         if isinstance(grid, str):  # "auto": the stand-in keeps the default 5 nm grid
             grid = np.arange(380.0, 781.0, 5.0)
-        P = init.equal_mass_partition(objective.make_problem(spectrum, grid))
+        P = init.equal_mass_partition(make_problem(spectrum, grid))
         if not accepted:
             P = np.where(np.asarray(grid)[None, :] < 500.0, 0.0, P + 1e-3)
         if progress is not None:
@@ -222,12 +223,13 @@ def test_colour_bar_and_plot_are_pngs(tmp_path, monkeypatch):
 
 def test_colour_bar_rows_are_right():
     """Target row is the exact colour; the result row averages to it (unbiased table)."""
-    from wavelength_pdf import init, objective, plots
+    from wavelength_pdf import init, plots
+    from wavelength_pdf.problem import make_problem
     from wavelength_pdf.spectra import load_spectrum
 
     sp = load_spectrum("cie:FL2")
     grid = np.arange(380.0, 781.0, 5.0)
-    P = init.equal_mass_partition(objective.make_problem(sp, grid))
+    P = init.equal_mass_partition(make_problem(sp, grid))
     labels, xyz = plots.colour_bar_rows(sp, Table(grid, P), n_u=4096)
     assert labels == ["uniform", "initialization", "result", "target"]
     np.testing.assert_allclose(xyz[-1], np.broadcast_to(xyz[-1, 0], xyz[-1].shape))
@@ -301,6 +303,7 @@ def test_batch_parallel_workers_report_errors(tmp_path, capsys):
 
 def test_show_prints_grid_normalization_and_J(tmp_path, capsys):
     from wavelength_pdf import objective
+    from wavelength_pdf.problem import make_problem
     from wavelength_pdf.spectra import load_spectrum
 
     grid = np.linspace(380.0, 780.0, 41)
@@ -316,7 +319,7 @@ def test_show_prints_grid_normalization_and_J(tmp_path, capsys):
     # pdf3 is 0 up to 570 nm, a ramp to 580 nm, then flat: 1 / 205 after renormalizing.
     assert "pdf3: integral 1, max 0.00487805 /nm at 580 nm, non-zero 580-780 nm" in out
     assert "# name: flat" in out
-    j = objective.J(objective.make_problem(load_spectrum("cie:D65"), grid), read_table(path).pdfs)
+    j = objective.J(make_problem(load_spectrum("cie:D65"), grid), read_table(path).pdfs)
     assert f"D65: J {j:.6g}" in out, out
 
 
@@ -335,8 +338,9 @@ def test_optimize_end_to_end(tmp_path):
     assert hdr["name"] == "D65" and hdr["accepted"] == "True"
     assert float(hdr["J"]) <= float(hdr["J_init"]) * (1 + 1e-12)
     from wavelength_pdf import objective
+    from wavelength_pdf.problem import make_problem
     from wavelength_pdf.spectra import load_spectrum
 
-    problem = objective.make_problem(load_spectrum("cie:D65"), t.grid)
+    problem = make_problem(load_spectrum("cie:D65"), t.grid)
     assert objective.J(problem, t.pdfs) == pytest.approx(float(hdr["J"]), rel=1e-9), \
         "the header's J is the J of the written table"

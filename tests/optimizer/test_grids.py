@@ -3,7 +3,9 @@
 import numpy as np
 
 import wavelength_pdf  # noqa: F401  (enables float64)
-from wavelength_pdf import grids, objective
+from wavelength_pdf import grids
+from wavelength_pdf.model import DEFAULT_GRID
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 
 WL = np.arange(380.0, 781.0, 0.5)
@@ -19,15 +21,15 @@ def _smooth():
 
 
 def test_line_lamps_are_told_apart_from_smooth_spectra():
-    lines = objective.make_problem(_lines())
-    smooth = objective.make_problem(_smooth())
+    lines = make_problem(_lines())
+    smooth = make_problem(_smooth())
     assert grids.is_spiky(lines) and not grids.is_spiky(smooth)
-    assert grids.interpolation_error(smooth, objective.DEFAULT_GRID) < 0.01
+    assert grids.interpolation_error(smooth, DEFAULT_GRID) < 0.01
 
 
 def test_refine_adds_nodes_around_the_lines_only():
-    p = objective.make_problem(_lines())
-    base = objective.DEFAULT_GRID
+    p = make_problem(_lines())
+    base = DEFAULT_GRID
     g = grids.refine(p, base, 161, 1.25)
     assert g.size == 161
     assert np.all(np.isin(base, g))  # a table on the base grid is representable exactly
@@ -49,14 +51,14 @@ def test_refine_adds_nodes_around_the_lines_only():
 
 
 def test_refine_stops_at_the_smallest_step():
-    p = objective.make_problem(_lines())
+    p = make_problem(_lines())
     g = grids.refine(p, np.array([430.0, 440.0]), 1000, 2.5)
     assert g.size < 1000 and np.min(np.diff(g)) >= 2.5 - 1e-9
 
 
 def test_refine_stops_at_the_target_error_and_fill_to_reaches_the_bucket():
-    p = objective.make_problem(_lines())
-    base = objective.DEFAULT_GRID
+    p = make_problem(_lines())
+    base = DEFAULT_GRID
     g = grids.refine(p, base, 481, grids.MIN_STEP_NM, target_error=0.01)
     assert g.size < 481 and grids.interpolation_error(p, g) <= 0.01
     f = grids.fill_to(g, grids.bucket(g.size))

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import wavelength_pdf  # noqa: F401  (enables float64)
-from wavelength_pdf import colorimetry, health, init, objective, sampling
+from wavelength_pdf import colorimetry, health, init, sampling, second_moment
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 
 GRID = np.arange(380.0, 781.0, 20.0)  # the same compiled shape as test_objective
@@ -21,7 +22,7 @@ def _smooth():
 
 @pytest.fixture(scope="module")
 def problem():
-    return objective.make_problem(_smooth(), GRID)
+    return make_problem(_smooth(), GRID)
 
 
 def _f(lam, spectrum, scale):
@@ -99,7 +100,7 @@ def test_exact_second_moment_matches_fine_quadrature(problem):
     P[:, 5] = 1e-4  # a near-zero mixture value makes 1/M vary a lot over two segments
     PN = P / np.trapezoid(P, GRID, axis=1)[:, None]
     M = PN.sum(axis=0)
-    got = np.asarray(jax.jit(objective._diag_second_moment)(problem.arrays, M))
+    got = np.asarray(jax.jit(second_moment.diag_second_moment)(problem.arrays, M))
     # Fine midpoint rule, graded towards 480 nm where 1/M varies on a 1e-3 nm scale.
     graded = 480.0 + np.array([-1.0, 1.0])[:, None] * np.geomspace(1e-9, 20.0, 20000)[None, :]
     x = np.unique(np.concatenate([np.linspace(380.0, 780.0, 400_001), graded.ravel(),
@@ -119,7 +120,7 @@ def test_a_channel_whose_integral_is_zero_is_unbiased_not_nan():
     """A red line (z-bar is 0 above ~650 nm) has Z = 0: its relative bias and std were 0 / 0,
     NaN, and every table for it was refused as 'relative bias nan'."""
     red = Spectrum("red line", "test:red", np.array([699.0, 700.0, 701.0]), np.array([0.0, 1.0, 0.0]))
-    p = objective.make_problem(red, GRID)
+    p = make_problem(red, GRID)
     assert p.c[2] == 0.0
     P0 = init.equal_mass_partition(p)
     h = health.health(p, P0)

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import wavelength_pdf  # noqa: F401  (enables float64)
-from wavelength_pdf import colorimetry, init, objective
+from wavelength_pdf import colorimetry, init
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 
 GRID = np.arange(380.0, 781.0, 20.0)
@@ -29,7 +30,7 @@ SPECTRA = {
 @pytest.fixture(scope="module", params=list(SPECTRA))
 def case(request):
     s = SPECTRA[request.param]
-    return s, objective.make_problem(s, GRID)
+    return s, make_problem(s, GRID)
 
 
 def _q(lam, s):
@@ -87,7 +88,7 @@ def test_mixture_is_positive_at_both_ends_of_every_segment_where_f_is_positive(c
 
 
 def test_a_line_between_two_nodes_gets_its_mass_on_those_nodes():
-    p = objective.make_problem(SPECTRA["line"], GRID)
+    p = make_problem(SPECTRA["line"], GRID)
     P = init.equal_mass_partition(p)
     around = (GRID == 420.0) | (GRID == 440.0)
     assert np.all(P[:, around] > 0) and np.all(P[:, ~around] == 0.0)
@@ -96,7 +97,7 @@ def test_a_line_between_two_nodes_gets_its_mass_on_those_nodes():
 
 
 def test_starting_points_are_deterministic_and_respect_the_support():
-    p = objective.make_problem(SPECTRA["gaps"], GRID)
+    p = make_problem(SPECTRA["gaps"], GRID)
     a = init.starting_points(p, seed=0)
     b = init.starting_points(p, seed=0)
     c = init.starting_points(p, seed=1)

@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 import wavelength_pdf  # noqa: F401  (enables float64)
-from wavelength_pdf import grids, objective
+from wavelength_pdf import grids
+from wavelength_pdf.model import DEFAULT_GRID
 from wavelength_pdf.optimize import optimize_spectrum
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 
 WL = np.round(np.arange(370.0, 790.0 + 1e-9, 0.01), 6)
@@ -45,10 +47,10 @@ def _spectrum(name):
 
 
 def test_auto_grid_puts_nodes_at_a_narrow_lines_edges_and_peak():
-    p = objective.make_problem(_spectrum("line-0.1nm"))
+    p = make_problem(_spectrum("line-0.1nm"))
     g = grids.auto_grid(p)
     assert g.size in grids.BUCKETS
-    assert np.all(np.isin(objective.DEFAULT_GRID, g))  # a 5 nm table stays representable
+    assert np.all(np.isin(DEFAULT_GRID, g))  # a 5 nm table stays representable
     assert np.min(np.diff(g)) >= grids.MIN_STEP_NM - 1e-9
     inside = g[(g > 531.9) & (g < 532.1)]
     # A 0.1 nm line (sigma 0.042 nm): nodes on both flanks and near the peak.
@@ -56,18 +58,18 @@ def test_auto_grid_puts_nodes_at_a_narrow_lines_edges_and_peak():
     assert np.min(np.abs(inside - 532.0)) < 0.03
     # The grid follows q far better than the 5 nm grid does (which misses the line
     # entirely: error 1); 0.05 nm steps leave ~10 % on a line of 0.1 nm.
-    assert grids.interpolation_error(p, g) < 0.15 * grids.interpolation_error(p, objective.DEFAULT_GRID)
+    assert grids.interpolation_error(p, g) < 0.15 * grids.interpolation_error(p, DEFAULT_GRID)
 
 
 def test_smooth_spectra_keep_the_default_grid():
     sp = Spectrum("smooth", "test:smooth", WL, 1.0 + 0.5 * np.sin(WL / 40.0))
-    g = grids.auto_grid(objective.make_problem(sp))
-    assert np.array_equal(g, objective.DEFAULT_GRID)
+    g = grids.auto_grid(make_problem(sp))
+    assert np.array_equal(g, DEFAULT_GRID)
 
 
 def test_fine_spectrum_lists_are_thinned_without_changing_the_target():
     sp = _spectrum("laser-triplet")
-    p = objective.make_problem(sp)
+    p = make_problem(sp)
     assert p.n_nodes < 0.1 * WL.size
     # The exact target from the full list (Simpson on the union with the CMFs) agrees.
     from wavelength_pdf import colorimetry

@@ -12,7 +12,9 @@ import numpy as np
 import pytest
 
 import wavelength_pdf  # noqa: F401  (enables float64)
-from wavelength_pdf import colorimetry, init, objective, sampling
+from wavelength_pdf import colorimetry, init, objective, quadrature, sampling, uniform
+from wavelength_pdf import problem as problem_mod
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 
 GRID = np.arange(380.0, 781.0, 20.0)  # 21 nodes
@@ -87,18 +89,18 @@ def brute_force(spectrum, P, n=100_000, uniform=False):
 
 @pytest.fixture(scope="module")
 def problems():
-    return {s.name: objective.make_problem(s, GRID) for s in (smooth(), spiky(), line_2nm(), zero_stretch())}
+    return {s.name: make_problem(s, GRID) for s in (smooth(), spiky(), line_2nm(), zero_stretch())}
 
 
 def test_all_fixtures_share_one_compiled_shape(problems):
     sizes = {p.nodes.size for p in problems.values()}
-    assert len(sizes) == 1 and sizes.pop() % objective._PAD == 0
+    assert len(sizes) == 1 and sizes.pop() % problem_mod._PAD == 0
 
 
 def test_target_is_the_exact_integral_with_Y_one(problems):
     # A flat spectrum: c is the integral of the CMFs, exact by the trapezoid rule on their
     # 1 nm nodes (they are linear in between).
-    flat = objective.make_problem(_spectrum("flat", [300.0, 900.0], [3.0, 3.0]), GRID)
+    flat = make_problem(_spectrum("flat", [300.0, 900.0], [3.0, 3.0]), GRID)
     sel = (_cmf_wl >= GRID[0]) & (_cmf_wl <= GRID[-1])
     want = np.trapezoid(_cmf[sel], _cmf_wl[sel], axis=0)
     np.testing.assert_allclose(flat.c, want / want[1], rtol=1e-13)
@@ -147,15 +149,15 @@ def test_mean_of_the_estimator_is_the_target(problems):
         P = random_table(3, init.support_nodes(p))
         _, m1, _ = objective.moments(p, P)
         np.testing.assert_allclose(m1, p.c, rtol=1e-9, err_msg=p.name)
-        _, m1u, _ = objective.uniform_moments(p)
+        _, m1u, _ = uniform.uniform_moments(p)
         np.testing.assert_allclose(m1u, p.c, rtol=1e-9, err_msg=p.name)
 
 
 def test_estimate_agrees_with_the_quadrature(problems):
     p = problems["spiky"]
     P = jnp.asarray(random_table(4))
-    glx, glw = objective.gauss_legendre(objective.ORDER)
-    u, wt, C, _ = jax.jit(objective._table_quadrature)(P, p.arrays, glx, glw)
+    glx, glw = quadrature.gauss_legendre(quadrature.ORDER)
+    u, wt, C, _ = jax.jit(quadrature.table_quadrature)(P, p.arrays, glx, glw)
     sel = np.linspace(0, u.size - 1, 500).astype(int)
     np.testing.assert_allclose(objective.estimate(p, P, np.asarray(u)[sel]), np.asarray(C)[sel], rtol=1e-10)
     assert abs(float(jnp.sum(wt)) - 1.0) < 1e-12
@@ -185,7 +187,7 @@ def test_scale_invariance_from_1e_minus_30_to_1e30(problems):
     J0 = objective.J(base, P)
     s = spiky()
     for scale in (1e-30, 1e-10, 1e10, 1e30):
-        p = objective.make_problem(_spectrum("spiky", s.wavelengths, s.values * scale), GRID)
+        p = make_problem(_spectrum("spiky", s.wavelengths, s.values * scale), GRID)
         np.testing.assert_allclose(p.spec, base.spec, rtol=1e-14)
         np.testing.assert_allclose(p.c, base.c, rtol=1e-14)
         assert abs(objective.J(p, P) - J0) <= 1e-12 * J0, scale
@@ -231,10 +233,10 @@ def test_uniform_is_the_balance_heuristic_with_four_uniform_densities(problems):
     f = np.interp(lam, s.wavelengths, s.values)[..., None] * np.stack(
         [np.interp(lam, _cmf_wl, _cmf[:, i]) for i in range(3)], axis=-1) * p.scale
     direct = (hi - lo) / 4.0 * f.sum(axis=0)
-    np.testing.assert_allclose(objective.uniform_estimate(p, u), direct, rtol=1e-12)
+    np.testing.assert_allclose(uniform.uniform_estimate(p, u), direct, rtol=1e-12)
     # ... and J against the independent brute force integral.
     J_bf = brute_force(s, None, uniform=True)[0]
-    assert abs(objective.uniform_J(p) - J_bf) < 2e-4 * J_bf
+    assert abs(uniform.uniform_J(p) - J_bf) < 2e-4 * J_bf
 
 
 def test_stratified_uniform_equals_four_quarter_boxes():
@@ -247,16 +249,16 @@ def test_stratified_uniform_equals_four_quarter_boxes():
     assert grid.size == GRID.size  # same compiled shape as the other tests
     edges = [lo] + cuts + [hi]
     P = np.stack([((grid >= edges[k] - 1e-12) & (grid <= edges[k + 1] + 1e-12)).astype(float) for k in range(4)])
-    p = objective.make_problem(smooth(), grid)
-    Ju = objective.uniform_J(p)
+    p = make_problem(smooth(), grid)
+    Ju = uniform.uniform_J(p)
     Jb = objective.J(p, P)
     assert abs(Jb - Ju) < 2e-3 * Ju, (Jb, Ju)
 
 
 def test_bad_input_is_rejected_with_the_source_named():
     with pytest.raises(ValueError, match="test:dark"):
-        objective.make_problem(_spectrum("dark", [300.0, 350.0], [1.0, 1.0]), GRID)
+        make_problem(_spectrum("dark", [300.0, 350.0], [1.0, 1.0]), GRID)
     with pytest.raises(ValueError, match="strictly increasing"):
-        objective.make_problem(smooth(), GRID[::-1])
+        make_problem(smooth(), GRID[::-1])
     with pytest.raises(ValueError, match="shape"):
-        objective.J(objective.make_problem(smooth(), GRID), np.ones((3, GRID.size)))
+        objective.J(make_problem(smooth(), GRID), np.ones((3, GRID.size)))

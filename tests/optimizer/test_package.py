@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from wavelength_pdf import data
-from wavelength_pdf.evaluation import render
+from wavelength_pdf import renderer
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -73,40 +73,40 @@ def test_renderer_lookup_order(tmp_path, monkeypatch):
     (tmp_path / "bin").mkdir()
     on_path = _exe(tmp_path / "bin" / "pbrt")
     monkeypatch.setenv("PATH", str(tmp_path / "bin"))
-    monkeypatch.setattr(render, "BUNDLED_PBRT", bundled)
-    monkeypatch.setenv(render.PBRT_ENV, str(b))
-    assert render.find_pbrt(a) == a
-    assert render.find_pbrt() == b
-    monkeypatch.delenv(render.PBRT_ENV)
-    monkeypatch.setattr(render, "CHECKOUT_PBRT", c)
-    assert render.find_pbrt() == c
-    monkeypatch.setattr(render, "CHECKOUT_PBRT", tmp_path / "missing")
-    assert render.find_pbrt() == bundled
-    monkeypatch.setattr(render, "BUNDLED_PBRT", tmp_path / "_bin" / "missing")
-    assert render.find_pbrt() == on_path
+    monkeypatch.setattr(renderer, "BUNDLED_PBRT", bundled)
+    monkeypatch.setenv(renderer.PBRT_ENV, str(b))
+    assert renderer.find_pbrt(a) == a
+    assert renderer.find_pbrt() == b
+    monkeypatch.delenv(renderer.PBRT_ENV)
+    monkeypatch.setattr(renderer, "CHECKOUT_PBRT", c)
+    assert renderer.find_pbrt() == c
+    monkeypatch.setattr(renderer, "CHECKOUT_PBRT", tmp_path / "missing")
+    assert renderer.find_pbrt() == bundled
+    monkeypatch.setattr(renderer, "BUNDLED_PBRT", tmp_path / "_bin" / "missing")
+    assert renderer.find_pbrt() == on_path
 
 
 def test_the_bundled_renderer_is_inside_the_package():
     import wavelength_pdf
 
-    assert render.BUNDLED_PBRT == Path(wavelength_pdf.__file__).resolve().parent / "_bin" / "pbrt"
+    assert renderer.BUNDLED_PBRT == Path(wavelength_pdf.__file__).resolve().parent / "_bin" / "pbrt"
 
 
 def test_renderer_not_found_lists_where_it_looked_and_how_to_get_one(tmp_path, monkeypatch):
-    monkeypatch.setenv(render.PBRT_ENV, str(tmp_path / "nope"))
-    monkeypatch.setattr(render, "CHECKOUT_PBRT", tmp_path / "build" / "pbrt")
-    monkeypatch.setattr(render, "BUNDLED_PBRT", tmp_path / "_bin" / "pbrt")
+    monkeypatch.setenv(renderer.PBRT_ENV, str(tmp_path / "nope"))
+    monkeypatch.setattr(renderer, "CHECKOUT_PBRT", tmp_path / "build" / "pbrt")
+    monkeypatch.setattr(renderer, "BUNDLED_PBRT", tmp_path / "_bin" / "pbrt")
     monkeypatch.setenv("PATH", str(tmp_path))
-    with pytest.raises(render.RendererNotFound) as e:
-        render.find_pbrt()
+    with pytest.raises(renderer.RendererNotFound) as e:
+        renderer.find_pbrt()
     msg = str(e.value)
     for place in ("nope", "build/pbrt", "_bin/pbrt"):
         assert str(tmp_path / place) in msg, place
     assert "PATH" in msg and "--pbrt" in msg
     for way in ("scripts/setup.sh", "cmake --install", "build_wheel.sh --with-pbrt"):
         assert way in msg, way
-    with pytest.raises(render.RendererNotFound, match="not an executable"):
-        render.find_pbrt(tmp_path / "nope")
+    with pytest.raises(renderer.RendererNotFound, match="not an executable"):
+        renderer.find_pbrt(tmp_path / "nope")
 
 
 def test_ipopt_without_cyipopt_says_how_to_install(monkeypatch):

@@ -4,8 +4,6 @@ from __future__ import annotations
 import io
 
 from wavelength_pdf import progress
-import inspect
-
 from wavelength_pdf.optimize import evaluation_budget
 from wavelength_pdf.solvers import SOLVERS
 
@@ -15,7 +13,7 @@ def test_budget_is_the_solvers():
     assert evaluation_budget("multistage", grid=[380.0, 780.0],
                              solver_options={"max_evals": 40}) == 40
     # The auto grid is chosen before optimizing (no second, polished refinement any more).
-    default = inspect.signature(SOLVERS["multistage"]).parameters["max_evals"].default
+    default = SOLVERS["multistage"].max_evaluations
     assert evaluation_budget("multistage", grid="auto") == default
     assert evaluation_budget("multistage", grid="auto") == evaluation_budget("multistage", grid=[380.0, 780.0])
 

@@ -9,7 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from wavelength_pdf import cli, colorimetry, health, init, objective
+from wavelength_pdf import cli, colorimetry, health, init, objective, uniform
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.reflectances import (ReflectanceSet, colorchecker, load_reflectances,
                                          read_reflectances)
 from wavelength_pdf.result import read_header
@@ -37,39 +38,39 @@ def lamp():
 
 @pytest.fixture(scope="module")
 def table(lamp):
-    return init.equal_mass_partition(objective.make_problem(lamp, GRID))
+    return init.equal_mass_partition(make_problem(lamp, GRID))
 
 
 # Every problem below has two colours (one compiled shape class: the tests stay fast).
 
 def test_a_white_surface_is_the_plain_objective(lamp, table):
     """R = 1 everywhere: the same J, uniform J, health as design §4.1's objective."""
-    plain = objective.make_problem(lamp, GRID)
-    white = objective.make_problem(lamp, GRID, refl_set((1, 1, 1, 1, 1), (1, 1, 1, 1, 1)))
+    plain = make_problem(lamp, GRID)
+    white = make_problem(lamp, GRID, refl_set((1, 1, 1, 1, 1), (1, 1, 1, 1, 1)))
     assert white.batched and not plain.batched
     assert objective.J(white, table) == pytest.approx(objective.J(plain, table), rel=1e-12)
-    assert objective.uniform_J(white) == pytest.approx(objective.uniform_J(plain), rel=1e-12)
+    assert uniform.uniform_J(white) == pytest.approx(uniform.uniform_J(plain), rel=1e-12)
     std = health.health(white, table).std
     assert std.shape == (2, 3)
     np.testing.assert_allclose(std, [health.health(plain, table).std] * 2, rtol=1e-10)
 
 
 def test_J_is_the_mean_of_each_colours_J(lamp, table):
-    both = objective.make_problem(lamp, GRID, refl_set(RED, BLUE))
-    red = objective.make_problem(lamp, GRID, refl_set(RED, RED))
-    blue = objective.make_problem(lamp, GRID, refl_set(BLUE, BLUE))
+    both = make_problem(lamp, GRID, refl_set(RED, BLUE))
+    red = make_problem(lamp, GRID, refl_set(RED, RED))
+    blue = make_problem(lamp, GRID, refl_set(BLUE, BLUE))
     J_red, J_blue = objective.J(red, table), objective.J(blue, table)
     assert J_red != pytest.approx(J_blue, rel=1e-3)  # the colours do differ
     assert objective.J(both, table) == pytest.approx(0.5 * (J_red + J_blue), rel=1e-12)
-    assert objective.uniform_J(both) == pytest.approx(
-        0.5 * (objective.uniform_J(red) + objective.uniform_J(blue)), rel=1e-12)
+    assert uniform.uniform_J(both) == pytest.approx(
+        0.5 * (uniform.uniform_J(red) + uniform.uniform_J(blue)), rel=1e-12)
 
 
 def test_each_colour_is_its_own_exact_colour_relative_to_the_white(lamp, table):
     """Target: the exact integral of I R cmf, in the scale where the white surface has Y = 1;
     the estimator's mean is that target (unbiased) for every colour."""
-    p = objective.make_problem(lamp, GRID, refl_set(RED, BLUE))
-    white = objective.make_problem(lamp, GRID)
+    p = make_problem(lamp, GRID, refl_set(RED, BLUE))
+    white = make_problem(lamp, GRID)
     lam = np.linspace(380.0, 780.0, 400001)
     f = lamp(lam) * white.scale
     cmf = np.stack([np.interp(lam, white.nodes[:white.n_nodes], white.cmf[:white.n_nodes, i])
@@ -85,7 +86,7 @@ def test_each_colour_is_its_own_exact_colour_relative_to_the_white(lamp, table):
 
 
 def test_gradient_matches_finite_differences(lamp, table):
-    p = objective.make_problem(lamp, GRID, refl_set(RED, BLUE))
+    p = make_problem(lamp, GRID, refl_set(RED, BLUE))
     vg = objective.value_and_grad(p)
     P = np.asarray(table) + 0.2 * np.random.default_rng(1).random(np.shape(table)) * np.max(table)
     J, g = vg(P)
@@ -102,7 +103,7 @@ def test_health_holds_for_every_colour(lamp, table):
     and the rejection say so even though the blue surface hardly notices."""
     P = np.where(GRID[None, :] > 600.0, 0.0, np.asarray(table) + 1e-3)
     wl = (380.0, 480.0, 590.0, 600.0, 780.0)
-    p = objective.make_problem(lamp, GRID, refl_set((0.6, 0.5, 0.1, 0.0, 0.0), RED, wl=wl))
+    p = make_problem(lamp, GRID, refl_set((0.6, 0.5, 0.1, 0.0, 0.0), RED, wl=wl))
     h = health.health(p, P)
     assert np.max(np.abs(h.bias_xyz[1])) > 1e-2 and np.max(np.abs(h.bias_xyz[0])) < 1e-9
     assert h.bias == pytest.approx(np.max(np.abs(h.bias_xyz)))
@@ -168,7 +169,7 @@ def test_optimize_with_a_reflectance_file_end_to_end(tmp_path):
     t = read_table(out)
     hdr = read_header(t)
     assert "reflectances: two (2 colours" in hdr["source"]
-    p = objective.make_problem(load_spectrum("cie:FL2"), t.grid, read_reflectances(f))
+    p = make_problem(load_spectrum("cie:FL2"), t.grid, read_reflectances(f))
     assert objective.J(p, t.pdfs) == pytest.approx(float(hdr["J"]), rel=1e-9)
     assert float(hdr["J"]) < float(hdr["J_uniform"])
 

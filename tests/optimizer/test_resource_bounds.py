@@ -52,7 +52,7 @@ def test_a_step_that_would_not_fit_in_any_memory_is_refused_without_allocating(t
 
 
 def test_the_limit_itself_is_accepted_and_the_library_refuses_beyond_it():
-    from wavelength_pdf.objective import make_problem
+    from wavelength_pdf.problem import make_problem
     from wavelength_pdf.produce import make_grid
 
     assert make_grid(380.0, 780.0, "0.1").size == MAX_TABLE_NODES
@@ -62,12 +62,12 @@ def test_the_limit_itself_is_accepted_and_the_library_refuses_beyond_it():
 
 def test_a_spectrum_needing_more_memory_than_the_machine_has_is_refused(monkeypatch):
     from wavelength_pdf import model
-    from wavelength_pdf.objective import make_problem
+    from wavelength_pdf.problem import make_problem
 
     n = 30000
     rng = np.random.default_rng(1)
     wl = np.linspace(380.0, 780.0, n)
-    # Noise does not thin away (objective.SPECTRUM_TOL): every sample is a node, and they
+    # Noise does not thin away (problem.SPECTRUM_TOL): every sample is a node, and they
     # need ~0.9 GB beyond the optimizer's own 0.7 GB. A machine of 1 GB refuses them...
     sp = make_spectrum("noise", "noise.spd", wl, 1.0 + rng.random(n))
     monkeypatch.setattr(model, "physical_memory", lambda: 1e9)
@@ -168,12 +168,12 @@ def _slow(fn, seconds):
 def test_the_search_does_not_start_when_the_figures_spent_the_cap(monkeypatch):
     """A cap smaller than what the reference figures take (here made slow: they stand for
     a compilation) leaves no search, and the call ends soon after the cap."""
-    from wavelength_pdf import objective
+    from wavelength_pdf import uniform
     from wavelength_pdf.optimize import optimize_spectrum
 
     sp = load_spectrum("cie:D65")
     optimize_spectrum(sp, grid=DEFAULT_GRID, solver_options={"max_evals": 1})  # compiled
-    monkeypatch.setattr(objective, "uniform_J", _slow(objective.uniform_J, 1.0))
+    monkeypatch.setattr(uniform, "uniform_J", _slow(uniform.uniform_J, 1.0))
     t = time.monotonic()
     r = optimize_spectrum(sp, grid=DEFAULT_GRID, max_seconds=1.5)
     assert r.history == [] and "not started" in r.message
@@ -183,12 +183,15 @@ def test_the_search_does_not_start_when_the_figures_spent_the_cap(monkeypatch):
 def test_the_solvers_clock_includes_its_own_compiling(monkeypatch):
     """The solver's deadline starts when it is called, before it prepares (compiles) its
     objective: a cap spent preparing leaves no evaluation."""
-    from wavelength_pdf import init, objective, solvers
+    from wavelength_pdf import init, solvers
+    from wavelength_pdf import problem as problem_mod
+    from wavelength_pdf.budget import Budget
+    from wavelength_pdf.problem import make_problem
 
-    problem = objective.make_problem(load_spectrum("cie:D65"), DEFAULT_GRID)
-    P0 = init.equal_mass_partition(problem)
-    monkeypatch.setattr(objective, "simplify", _slow(objective.simplify, 1.0))
-    run = solvers.multistage(problem, P0, max_seconds=0.5)
+    problem = make_problem(load_spectrum("cie:D65"), DEFAULT_GRID)
+    start = solvers.Start.of(problem, init.equal_mass_partition(problem))
+    monkeypatch.setattr(problem_mod, "simplify", _slow(problem_mod.simplify, 1.0))
+    run = solvers.SOLVERS["multistage"](start, Budget.starting(1000, 0.5))
     assert run.nfev == 0 and run.history == []
     assert "time cap" in run.message
 
@@ -241,7 +244,7 @@ def test_huge_spectrum_gives_the_same_problem_and_a_scene_the_renderer_can_read(
     """The objective does not see the scale; the evaluation's scene (single precision in the
     renderer) gets values it can hold."""
     from wavelength_pdf.evaluation.scene_edit import inline_spectrum
-    from wavelength_pdf.objective import make_problem
+    from wavelength_pdf.problem import make_problem
 
     d65 = load_spectrum("cie:D65")
     huge = make_spectrum("huge", "test", d65.wavelengths, np.asarray(d65.values) * 1e300)

@@ -4,8 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wavelength_pdf import health as health_mod, init, objective
+from wavelength_pdf import health as health_mod, init
 from wavelength_pdf.optimize import evaluate_table
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.result import SUMMARY_FIELDS, Result, read_header
 from wavelength_pdf.spectra import load_spectrum
 from wavelength_pdf.table import Table, read_table, write_table
@@ -16,7 +17,7 @@ GRID = np.linspace(380.0, 780.0, 41)
 @pytest.fixture(scope="module")
 def fl2():
     sp = load_spectrum("cie:FL2")
-    problem = objective.make_problem(sp, GRID)
+    problem = make_problem(sp, GRID)
     return sp, problem, init.equal_mass_partition(problem)
 
 

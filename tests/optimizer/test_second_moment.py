@@ -1,5 +1,5 @@
 """The closed-form integral of a quartic over a linear function (the exact diagonal part
-of the second moment, objective._diag_second_moment) against adaptive quadrature, on
+of the second moment, second_moment.diag_second_moment) against adaptive quadrature, on
 every branch: the power series (b h / a small), the closed form, and a = 0."""
 
 import numpy as np
@@ -9,7 +9,7 @@ from scipy.integrate import quad
 import jax
 import jax.numpy as jnp
 
-from wavelength_pdf import objective
+from wavelength_pdf import second_moment
 from wavelength_pdf.precision import float64
 
 
@@ -28,7 +28,7 @@ def test_quartic_over_linear_matches_quadrature(r_range):
     r = np.exp(rng.uniform(np.log(r_range[0]), np.log(r_range[1]), n))  # r = b h / a
     b = r * a / h
     e = rng.uniform(0.0, 1.0, (n, 5))
-    got = np.asarray(objective._quartic_over_linear(jnp.asarray(e), jnp.asarray(a), jnp.asarray(b), jnp.asarray(h)))
+    got = np.asarray(second_moment.quartic_over_linear(jnp.asarray(e), jnp.asarray(a), jnp.asarray(b), jnp.asarray(h)))
     ref = np.array([_reference(*args) for args in zip(e, a, b, h)])
     np.testing.assert_allclose(got, ref, rtol=1e-9)
 
@@ -40,7 +40,7 @@ def test_quartic_over_linear_at_a_zero():
     a = jnp.zeros(3)
     b = jnp.asarray([2.0, 2.0, 0.0])
     h = jnp.asarray([1.5, 1.5, 1.5])
-    got = np.asarray(objective._quartic_over_linear(e, a, b, h))
+    got = np.asarray(second_moment.quartic_over_linear(e, a, b, h))
     expect = sum(float(e[0, k]) * 1.5**k / (k * 2.0) for k in range(1, 5))
     assert got[0] == pytest.approx(expect, rel=1e-14)
     assert np.isposinf(got[1])
@@ -53,8 +53,8 @@ def test_quartic_over_linear_gradient_matches_finite_differences():
     h = jnp.asarray([0.7, 0.7, 0.7])
     a = jnp.asarray([0.5, 0.5, 0.5])
     b = jnp.asarray([0.01, 0.5, 50.0])  # series, closed form near the switch, large r
-    g = jax.grad(lambda a, b: jnp.sum(objective._quartic_over_linear(e, a, b, h)), argnums=(0, 1))(a, b)
-    f = lambda a, b: np.asarray(objective._quartic_over_linear(e, jnp.asarray(a), jnp.asarray(b), h))  # noqa: E731
+    g = jax.grad(lambda a, b: jnp.sum(second_moment.quartic_over_linear(e, a, b, h)), argnums=(0, 1))(a, b)
+    f = lambda a, b: np.asarray(second_moment.quartic_over_linear(e, jnp.asarray(a), jnp.asarray(b), h))  # noqa: E731
     step = 1e-6
     for i, x in enumerate((np.asarray(a), np.asarray(b))):
         d = step * np.maximum(np.abs(x), 1e-3)

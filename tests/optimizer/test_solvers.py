@@ -6,7 +6,9 @@ import pytest
 
 import wavelength_pdf  # noqa: F401  (enables float64)
 from wavelength_pdf import health, init, objective, solvers
+from wavelength_pdf.budget import Budget
 from wavelength_pdf.optimize import Result, evaluate_table, optimize_spectrum
+from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 from wavelength_pdf.table import Table
 
@@ -23,12 +25,14 @@ def _lamp():
 
 @pytest.fixture(scope="module")
 def problem():
-    return objective.make_problem(_lamp(), GRID)
+    return make_problem(_lamp(), GRID)
 
 
 def test_registry():
     assert set(solvers.SOLVERS) == {"multistage", "lbfgsb", "trust-constr", "ipopt"}
     assert solvers.DEFAULT_SOLVER == "multistage"
+    assert all(entry.name == name for name, entry in solvers.SOLVERS.items())
+    assert solvers.SOLVERS["ipopt"].requires == "cyipopt"
 
 
 @pytest.mark.parametrize("name,budget", [("lbfgsb", 60), ("trust-constr", 40), ("ipopt", 40), ("multistage", 200)])
@@ -36,7 +40,7 @@ def test_each_solver_lowers_J_and_stays_healthy(problem, name, budget):
     P0 = init.equal_mass_partition(problem)
     J0 = objective.J(problem, P0)
     steps = []
-    r = solvers.SOLVERS[name](problem, P0, seed=0, max_evals=budget,
+    r = solvers.SOLVERS[name](solvers.Start.of(problem, P0), Budget(budget), seed=0,
                               progress=lambda k, J: steps.append((k, J)))
     assert r.J < 0.8 * J0, f"{name}: J {r.J} vs initialization {J0}"
     np.testing.assert_allclose(np.trapezoid(r.P, GRID, axis=1), 1.0, rtol=1e-12)
@@ -54,8 +58,9 @@ def test_each_solver_lowers_J_and_stays_healthy(problem, name, budget):
 
 def test_same_input_and_seed_give_the_same_table(problem):
     P0 = init.equal_mass_partition(problem)
-    a = solvers.multistage(problem, P0, seed=3, max_evals=120)
-    b = solvers.multistage(problem, P0, seed=3, max_evals=120)
+    start = solvers.Start.of(problem, P0)
+    a = solvers.multistage(start, Budget(120), seed=3)
+    b = solvers.multistage(start, Budget(120), seed=3)
     np.testing.assert_array_equal(a.P, b.P)
     assert a.J == b.J and a.history == b.history
 
@@ -90,12 +95,10 @@ def test_optimize_spectrum_returns_an_accepted_result():
 def test_a_second_search_keeps_only_a_better_accepted_table(monkeypatch):
     """A result above the threshold is searched again (more starts kept, more evaluations);
     the second table replaces the first only if its J is lower and it is accepted."""
-    from wavelength_pdf import optimize as opt
-
     options = {"max_evals": 60}
-    monkeypatch.setattr(opt, "SECOND_SEARCH_ABOVE", np.inf)  # never
+    monkeypatch.setattr(solvers, "SECOND_SEARCH_ABOVE", np.inf)  # never
     first = optimize_spectrum(_lamp(), grid=GRID, solver_options=options)
-    monkeypatch.setattr(opt, "SECOND_SEARCH_ABOVE", 0.0)  # always
+    monkeypatch.setattr(solvers, "SECOND_SEARCH_ABOVE", 0.0)  # always
     both = optimize_spectrum(_lamp(), grid=GRID, solver_options=options)
     assert both.accepted and both.J <= first.J
     if "second search" in both.message:

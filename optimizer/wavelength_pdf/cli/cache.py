@@ -28,6 +28,28 @@ def help_text() -> str:
             "ahead of time.")
 
 
+def warm(spectra: list[str] | None = None, max_evals: int = 30) -> list[str]:
+    """Compile what ``optimize`` needs for each spectrum's grid (default
+    ``compile_cache.WARM_SPECTRUM``, whose "auto" grid is the default 5 nm one that most smooth spectra use) by running a short
+    optimization whose table is thrown away. Returns one line per spectrum. (Measured: after
+    ``warm``, a full default ``optimize cie:FL2`` took 10 s in all, against 45-65 s cold; it
+    compiled one small function more.)"""
+    import time
+
+    from wavelength_pdf.compile_cache import WARM_SPECTRUM
+    from wavelength_pdf.optimize import optimize_spectrum
+    from wavelength_pdf.spectra import load_spectrum
+
+    lines = []
+    for spec in spectra or [WARM_SPECTRUM]:
+        t = time.monotonic()
+        sp = load_spectrum(spec)
+        result = optimize_spectrum(sp, solver_options={"max_evals": int(max_evals)})
+        del result
+        lines.append(f"{spec}: compiled or loaded in {time.monotonic() - t:.0f} s")
+    return lines
+
+
 def cmd_cache(args: argparse.Namespace) -> int:
     from wavelength_pdf import compile_cache as cc
 
@@ -42,7 +64,7 @@ def cmd_cache(args: argparse.Namespace) -> int:
         n, freed = cc.clear(folder)
         print(f"compile cache: {folder}: deleted {n} files, {cc._size(freed)}")
     else:  # warm
-        for line in cc.warm(args.spectra or None, max_evals=args.max_evals):
+        for line in warm(args.spectra or None, max_evals=args.max_evals):
             print(line)
         print(cc.info().describe())
     return 0

@@ -85,7 +85,7 @@ def surface_colours(choice: str | None, spec: str, lo: float, hi: float, pbrt: s
     docs/whole-scenes.md); when the renderer cannot give them (none found, or no diffuse
     material) a warning says so and the white surface is used. Other spectra use the white
     surface unless ``--reflectances`` says otherwise; ``white`` asks for it explicitly."""
-    from wavelength_pdf.evaluation.render import RendererNotFound
+    from wavelength_pdf.renderer import RendererNotFound
     from wavelength_pdf.reflectances import load_reflectances
 
     if choice == "white":

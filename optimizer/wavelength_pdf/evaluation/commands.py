@@ -17,7 +17,8 @@ from typing import Sequence
 from wavelength_pdf import data, progress
 from wavelength_pdf.evaluation.protocol import (DEFAULT_METHODS, DEFAULT_SPP, Config, check_config, evaluate,
                                                 finish, plan, write_rows, WHOLE_SCENE)
-from wavelength_pdf.evaluation.render import PBRT_ENV, REPO, find_pbrt
+from wavelength_pdf.evaluation.render import REPO
+from wavelength_pdf.renderer import PBRT_ENV, find_pbrt
 from wavelength_pdf.produce import safe_name
 from wavelength_pdf.spectra import load_spectrum
 from wavelength_pdf.table import read_table

@@ -56,7 +56,7 @@ class Config:
     nthreads: int | None = None
     lo: float = 380.0
     hi: float = 780.0
-    #: The renderer; None: :func:`render.find_pbrt`'s lookup.
+    #: The renderer; None: :func:`wavelength_pdf.renderer.find_pbrt`'s lookup.
     pbrt: Path | None = None
     #: ``--reflectances``: the surface colours the table is optimized for (design §4.5),
     #: loaded once per job (:func:`wavelength_pdf.reflectances.load_reflectances`); None:
@@ -125,7 +125,7 @@ class RenderJob:
     sampler: rendering.Sampler
     spp: int
     seed: int
-    #: None: :func:`render.find_pbrt`'s lookup.
+    #: None: :func:`wavelength_pdf.renderer.find_pbrt`'s lookup.
     pbrt: Path | None = None
 
     def run(self, nthreads: int | None = None, on_percent: Callable[[int], None] | None = None

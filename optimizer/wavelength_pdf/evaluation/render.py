@@ -10,7 +10,6 @@ import hashlib
 import json
 import os
 import re
-import shutil
 import subprocess
 import time
 import uuid
@@ -18,66 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from wavelength_pdf.data import CHECKOUT, in_checkout
+from wavelength_pdf.data import CHECKOUT
+from wavelength_pdf.renderer import find_pbrt
 
 REPO = CHECKOUT
-#: The checkout's own build of the renderer (scripts/setup.sh).
-CHECKOUT_PBRT = CHECKOUT / "build" / "pbrt"
-#: The renderer inside an installed wheel built with ``scripts/build_wheel.sh --with-pbrt``.
-BUNDLED_PBRT = Path(__file__).resolve().parents[1] / "_bin" / "pbrt"
-#: Environment variable naming the renderer binary.
-PBRT_ENV = "WAVELENGTH_PDF_PBRT"
-#: The ways to get a renderer, for the message when none is found.
-HOW_TO_GET_PBRT = (
-    "give --pbrt PATH or set $" + PBRT_ENV + "; or, in a checkout, build it (bash scripts/setup.sh) and "
-    "put it on PATH (cmake --install build --prefix ~/.local) or inside the wheel "
-    "(bash scripts/build_wheel.sh --with-pbrt build/pbrt)")
-
-
-class RendererNotFound(FileNotFoundError):
-    """No renderer binary where :func:`find_pbrt` looked; the message lists the places."""
-
-
-def find_pbrt(explicit: str | os.PathLike | None = None) -> Path:
-    """The renderer binary: ``explicit`` (``--pbrt``), else ``$WAVELENGTH_PDF_PBRT``, else the
-    checkout's ``build/pbrt``, else the installed wheel's own (``wavelength_pdf/_bin/pbrt``),
-    else ``pbrt`` on ``PATH``.
-
-    Raises
-    ------
-    RendererNotFound
-        Nothing executable was found; the message lists every place looked at.
-    """
-    looked: list[str] = []
-
-    def usable(p: Path) -> bool:
-        return p.is_file() and os.access(p, os.X_OK)
-
-    if explicit is not None:
-        p = Path(explicit)
-        if usable(p):
-            return p
-        raise RendererNotFound(f"--pbrt {p}: not an executable file")
-    env = os.environ.get(PBRT_ENV)
-    if env:
-        if usable(Path(env)):
-            return Path(env)
-        looked.append(f"${PBRT_ENV}={env} (not an executable file)")
-    else:
-        looked.append(f"${PBRT_ENV} (not set)")
-    if in_checkout():
-        if usable(CHECKOUT_PBRT):
-            return CHECKOUT_PBRT
-        looked.append(f"{CHECKOUT_PBRT} (not built: bash scripts/setup.sh)")
-    if usable(BUNDLED_PBRT):
-        return BUNDLED_PBRT
-    looked.append(f"{BUNDLED_PBRT} (this wheel was built without --with-pbrt)")
-    on_path = shutil.which("pbrt")
-    if on_path:
-        return Path(on_path)
-    looked.append("pbrt on PATH (none)")
-    raise RendererNotFound("no renderer found; looked at: " + "; ".join(looked) + ". To get one: "
-                           + HOW_TO_GET_PBRT)
 
 
 class RenderError(RuntimeError):

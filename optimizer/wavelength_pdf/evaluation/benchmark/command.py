@@ -12,7 +12,7 @@ SWEEPS = ("all", "lamps", "scenes", "small")
 
 def cmd_benchmark(args) -> int:
     from wavelength_pdf.evaluation.benchmark import copy_report, run_benchmark
-    from wavelength_pdf.evaluation.render import find_pbrt
+    from wavelength_pdf.renderer import find_pbrt
 
     find_pbrt(args.pbrt)  # exit 2 before any work when there is no renderer (design §7)
     if args.sweep == "small":

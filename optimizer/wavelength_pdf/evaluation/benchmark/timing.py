@@ -23,6 +23,7 @@ import numpy as np
 from wavelength_pdf.evaluation import render as rendering
 from wavelength_pdf.evaluation.benchmark import grid as G
 from wavelength_pdf.evaluation.benchmark.run import JobPlan, sampler_of
+from wavelength_pdf.renderer import find_pbrt
 
 FIELDS = ["job", "row", "round", "spp", "process_cpu", "render_cpu", "wall", "depth"]
 
@@ -51,7 +52,7 @@ def time_job(p: JobPlan, rounds: int, spp: int, out: Path, say: Callable[[str], 
     from wavelength_pdf.exr import read_header
 
     rows = [r for r in sorted({row for row, _, _ in p.images}) if r != G.FLOOR]
-    pbrt = rendering.find_pbrt(p.truth_chunks[0].pbrt)
+    pbrt = find_pbrt(p.truth_chunks[0].pbrt)
     out.mkdir(parents=True, exist_ok=True)
     records = []
     for k in range(rounds):

@@ -1,0 +1,327 @@
+"""The objective's data for one lamp spectrum on one table grid (design §4): :class:`Problem`.
+
+The spectrum is used at its own resolution and the CMFs at theirs (1 nm), both linear
+between their nodes, so f = I * (xbar, ybar, zbar) is piecewise quadratic on the union of
+spectrum, CMF and table nodes: the problem holds every function on that union, scaled so
+that the target c (the exact integral of f over the grid range) has Y = 1.
+
+All arrays that describe a problem are padded to a multiple of ``_PAD`` entries, so the
+jitted functions compile once per size class rather than once per spectrum.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import jax
+import numpy as np
+
+from . import aot, colorimetry
+from .model import DEFAULT_GRID, check_objective_nodes, check_table_nodes, product_integrals
+
+#: Width (nm) of the ramp that stands in for the jump of a spectrum that stops at a
+#: non-zero value inside the table range (its effect on any integral is ~1e-12 relative).
+_JUMP_RAMP_NM = 1e-9
+
+#: Node arrays are padded to a multiple of this many entries (fewer distinct jit shapes).
+#: The work per evaluation grows with the padded size: a smooth lamp's search problem has
+#: 170-185 nodes, which a multiple of 64 pads to 192 and one of 256 to 256 (a third more
+#: time per evaluation, measured); a finer step would mean more size classes to compile.
+_PAD = 64
+
+#: Spectra with more than ``SPECTRUM_MAX_SAMPLES`` samples (a line written on a 0.01 nm
+#: list) drop the samples that linear interpolation between the kept ones reproduces to
+#: ``SPECTRUM_TOL`` of the peak (runs of zeros, straight stretches, far tails of lines):
+#: J changes by ~1e-9 relative, the work per evaluation can drop a hundredfold. Smaller
+#: spectra are used exactly as given.
+SPECTRUM_TOL = 1e-9
+SPECTRUM_MAX_SAMPLES = 2000
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Everything the objective needs about one spectrum on one table grid.
+
+    Attributes
+    ----------
+    name, source : str
+        The spectrum's name and where it came from.
+    grid : (M+1,) float64 array, nm
+        Table nodes.
+    nodes : (Nf,) float64 array, nm
+        Union of spectrum, CMF and table nodes inside [grid[0], grid[-1]] (first
+        ``n_nodes`` entries; the rest is padding beyond grid[-1] with zero values).
+    spec : (Nf,) float64 array
+        Spectrum at ``nodes``, scaled so that the target has Y = 1.
+    cmf : (Nf, 3) float64 array
+        xbar, ybar, zbar at ``nodes``.
+    n_nodes : int
+        Number of real entries of ``nodes``.
+    c : (3,) float64 array
+        Target XYZ (exact integral of f over the grid range), Y = 1.
+    lab_c : (3,) float64 array
+        Lab of the target (D65 white, Y = 1).
+    scale : float
+        Factor that took the spectrum's values to the scaled ``spec``.
+    weights : (K,) float64 array or None
+        With a set of surface reflectances (design §4.5): the weight of each colour in J
+        (summing to 1); None for the white surface of §4.1.
+    refl : (K, Nf) float64 array or None
+        The reflectances at ``nodes``. With them, ``spec`` is still the lamp alone (scaled
+        so that the white surface's colour has Y = 1, as without reflectances), ``c`` and
+        ``lab_c`` are per colour, (K, 3), and the arrays the jitted functions see carry
+        ``spec`` per colour, (K, Nf): I * R_k at the nodes.
+    reflectance_set : str
+        The set's name ('' without reflectances).
+    """
+
+    name: str
+    source: str
+    grid: np.ndarray
+    nodes: np.ndarray
+    spec: np.ndarray
+    cmf: np.ndarray
+    n_nodes: int
+    c: np.ndarray
+    lab_c: np.ndarray
+    scale: float
+    arrays: dict = field(repr=False, compare=False, default_factory=dict)
+    weights: np.ndarray | None = None
+    refl: np.ndarray | None = None
+    reflectance_set: str = ""
+
+    @property
+    def batched(self) -> bool:
+        """Whether J is the weighted mean over a set of surface colours (design §4.5)."""
+        return self.weights is not None
+
+
+def _with_ramps(wl: np.ndarray, val: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes of a piecewise-linear function that is zero outside [wl[0], wl[-1]].
+
+    A function that starts or ends at a non-zero value jumps there; a ramp of width
+    ``_JUMP_RAMP_NM`` to zero makes it continuous without changing it measurably.
+    """
+    wl = np.asarray(wl, dtype=np.float64)
+    val = np.asarray(val, dtype=np.float64)
+    if val[0] != 0.0:
+        wl = np.concatenate([[wl[0] - _JUMP_RAMP_NM], wl])
+        val = np.concatenate([[0.0], val])
+    if val[-1] != 0.0:
+        wl = np.concatenate([wl, [wl[-1] + _JUMP_RAMP_NM]])
+        val = np.concatenate([val, [0.0]])
+    return wl, val
+
+
+def _pad_to(n: int) -> int:
+    return ((n + _PAD - 1) // _PAD) * _PAD
+
+
+def _exact_integral(nodes: np.ndarray, spec: np.ndarray, cmf: np.ndarray) -> np.ndarray:
+    """Integral of spec * cmf over the node range; exact (Simpson) for the product of two
+    functions linear on every node interval."""
+    return np.sum(product_integrals(nodes, spec[:-1], spec[1:], cmf), axis=0)
+
+
+def make_problem(spectrum, grid: np.ndarray = DEFAULT_GRID, reflectances=None) -> Problem:
+    """Build the objective's data for ``spectrum`` on the table ``grid``.
+
+    Parameters
+    ----------
+    spectrum : wavelength_pdf.spectra.Spectrum
+        Any object with ``wavelengths`` (nm, increasing), ``values`` (>= 0), ``name`` and
+        ``source``; linear between samples and zero outside them.
+    grid : (M+1,) array, nm
+        Strictly increasing table nodes.
+    reflectances : wavelength_pdf.reflectances.ReflectanceSet, optional
+        Surface colours (design §4.5): J becomes the weighted mean over them of J with
+        f = I * R_k * cmf. Each reflectance is linear between its own samples and keeps its
+        end values beyond them; its samples join the union of nodes, and I * R_k is taken
+        linear between the union's nodes (the form in which the estimator and its target
+        both see it, so the target stays the estimator's exact mean).
+
+    Raises
+    ------
+    ValueError
+        If the grid is not strictly increasing or the spectrum has no power that the
+        CMFs see inside the grid range.
+    """
+    grid = np.asarray(grid, dtype=np.float64)
+    source = getattr(spectrum, "source", "<spectrum>")
+    name = getattr(spectrum, "name", source)
+    if grid.ndim != 1 or grid.size < 2 or not np.all(np.diff(grid) > 0):
+        raise ValueError(f"{source}: the table grid must be strictly increasing with >= 2 nodes")
+    wl = np.asarray(spectrum.wavelengths, dtype=np.float64)
+    val = np.asarray(spectrum.values, dtype=np.float64)
+    if wl.ndim != 1 or wl.shape != val.shape or wl.size < 2:
+        raise ValueError(f"{source}: wavelengths and values must be 1-D of equal length >= 2")
+    if not (np.all(np.isfinite(wl)) and np.all(np.isfinite(val))):
+        raise ValueError(f"{source}: spectrum contains NaN or infinity")
+    if np.any(val < 0):
+        raise ValueError(f"{source}: spectrum has negative values")
+    if not np.all(np.diff(wl) > 0):
+        raise ValueError(f"{source}: spectrum wavelengths are not strictly increasing")
+    lo, hi = float(grid[0]), float(grid[-1])
+    check_table_nodes(grid.size, f"{source}: the table grid")
+    if wl.size > SPECTRUM_MAX_SAMPLES and np.max(val) > 0:
+        wl, val = _thin_spectrum(wl, val, SPECTRUM_TOL * np.max(val))
+
+    # Union of all nodes inside the range, then every function evaluated on it exactly.
+    swl, sval = _with_ramps(wl, val)
+    cwl, cval = colorimetry.cmfs()
+    cwl_r = np.concatenate([[cwl[0] - _JUMP_RAMP_NM], cwl, [cwl[-1] + _JUMP_RAMP_NM]])
+    cval_r = np.concatenate([np.zeros((1, 3)), cval, np.zeros((1, 3))])
+    parts = [swl, cwl_r, grid]
+    if reflectances is not None:
+        rwl = np.asarray(reflectances.wavelengths, dtype=np.float64)
+        parts.append(rwl[(rwl > lo) & (rwl < hi)])
+    nodes = np.unique(np.concatenate(parts))
+    nodes = nodes[(nodes >= lo) & (nodes <= hi)]
+    check_objective_nodes(nodes.size, grid.size, source)
+    spec = np.interp(nodes, swl, sval, left=0.0, right=0.0)
+    cmf = np.stack([np.interp(nodes, cwl_r, cval_r[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
+    if reflectances is None:
+        return _from_nodes(name, source, grid, nodes, spec, cmf)
+    refl = np.stack([np.interp(nodes, rwl, r) for r in np.asarray(reflectances.values, dtype=np.float64)])
+    return _from_nodes(name, source, grid, nodes, spec, cmf, refl=refl,
+                       weights=np.asarray(reflectances.weights, dtype=np.float64),
+                       reflectance_set=reflectances.name)
+
+
+def _from_nodes(name: str, source: str, grid: np.ndarray, nodes: np.ndarray, spec: np.ndarray,
+                cmf: np.ndarray, refl: np.ndarray | None = None, weights: np.ndarray | None = None,
+                reflectance_set: str = "") -> Problem:
+    """Problem from the spectrum and CMFs (and reflectances, (K, n)) given at the union
+    nodes (inside the range)."""
+    lo, hi = float(grid[0]), float(grid[-1])
+    # Scale: first to a maximum of 1 (so that 1e-30 or 1e30 spectra behave alike), then
+    # so that the exact target has Y = 1.
+    peak = float(np.max(spec))
+    if not peak > 0:
+        raise ValueError(f"{source}: spectrum is zero over the table range {lo:g}-{hi:g} nm")
+    spec = spec / peak
+    c = _exact_integral(nodes, spec, cmf)
+    if not c[1] > 0:
+        raise ValueError(f"{source}: spectrum has no luminance (Y = 0) over {lo:g}-{hi:g} nm")
+    spec = spec / c[1]
+    scale = 1.0 / (peak * c[1])
+    c = _exact_integral(nodes, spec, cmf)
+    c = c / c[1]  # Y exactly 1
+    if refl is None:
+        spec_arr = spec
+        lab_c = np.asarray(_xyz_to_lab_jit(c))
+    else:
+        # Each colour relative to the white surface under the same lamp (Y = 1), in Lab
+        # relative to D65 at Y = 1 (design §4.5).
+        spec_arr = spec[None, :] * refl
+        c = np.stack([_exact_integral(nodes, s, cmf) for s in spec_arr])
+        if not np.all(c[:, 1] > 0):
+            k = int(np.flatnonzero(~(c[:, 1] > 0))[0])
+            raise ValueError(f"{source}: surface colour #{k} of {reflectance_set!r} reflects "
+                             f"nothing of this lamp (Y = 0) over {lo:g}-{hi:g} nm")
+        lab_c = np.asarray(colorimetry.xyz_to_lab(c))
+
+    # Padding: node arrays continue past hi (never reached) with zero values.
+    n_nodes = nodes.size
+    n_pad = _pad_to(n_nodes)
+    extra = n_pad - n_nodes
+    nodes_p = np.concatenate([nodes, hi + 1.0 + np.arange(extra, dtype=np.float64)])
+    spec_p = np.concatenate([spec, np.zeros(extra)])
+    cmf_p = np.concatenate([cmf, np.zeros((extra, 3))])
+    spec_arr_p = np.concatenate([spec_arr, np.zeros(spec_arr.shape[:-1] + (extra,))], axis=-1)
+    # Breakpoint wavelengths (padded with hi: duplicates give empty u-pieces) and their
+    # table segments, fixed for the problem.
+    bp = np.concatenate([nodes, np.full(extra, hi)])
+    m = grid.size - 1
+    bp_seg = np.clip(np.searchsorted(grid, bp, side="right") - 1, 0, m - 1)
+    bp_t = bp - grid[bp_seg]
+    bp_idx = np.concatenate([np.arange(n_nodes), np.full(extra, n_nodes - 1)])
+    # Table segment that holds the node interval [nodes[n], nodes[n+1]].
+    node_tseg = np.clip(np.searchsorted(grid, nodes_p, side="right") - 1, 0, m - 1)
+
+    arrays = {
+        "grid": np.asarray(grid),
+        "nodes": np.asarray(nodes_p),
+        "spec": np.asarray(spec_arr_p),
+        "cmf": np.asarray(cmf_p),
+        "bp": np.asarray(bp),
+        "bp_seg": np.asarray(bp_seg),
+        "bp_t": np.asarray(bp_t),
+        "bp_idx": np.asarray(bp_idx),
+        "node_tseg": np.asarray(node_tseg),
+        "lab_c": np.asarray(lab_c),
+        "c": np.asarray(c),
+    }
+    refl_p = None
+    if refl is not None:
+        w = np.asarray(weights, dtype=np.float64)
+        arrays["weights"] = np.asarray(w / w.sum())
+        refl_p = np.concatenate([refl, np.zeros((refl.shape[0], extra))], axis=1)
+    # One transfer, not jnp.asarray per array (each compiles a staging function per
+    # shape outside a trace: a dozen compilations per process).
+    arrays = jax.device_put(arrays)
+    return Problem(
+        name=name, source=source, grid=grid, nodes=nodes_p, spec=spec_p, cmf=cmf_p,
+        n_nodes=n_nodes, c=c, lab_c=lab_c, scale=scale, arrays=arrays,
+        weights=None if refl is None else np.asarray(arrays["weights"]), refl=refl_p,
+        reflectance_set=reflectance_set,
+    )
+
+
+def _polyline_keep(x: np.ndarray, Y: np.ndarray, tol: np.ndarray) -> np.ndarray:
+    """Nodes to keep so that every column of Y, linearly interpolated between kept nodes,
+    stays within tol of its values (Ramer-Douglas-Peucker, vertical distance)."""
+    keep = np.zeros(x.size, dtype=bool)
+    keep[0] = keep[-1] = True
+    stack = [(0, x.size - 1)]
+    while stack:
+        a, b = stack.pop()
+        if b <= a + 1:
+            continue
+        t = (x[a + 1 : b] - x[a]) / (x[b] - x[a])
+        err = np.max(np.abs(Y[a + 1 : b] - (Y[a] + (Y[b] - Y[a]) * t[:, None])) / tol, axis=1)
+        i = int(np.argmax(err))
+        if err[i] > 1.0:
+            m = a + 1 + i
+            keep[m] = True
+            stack += [(a, m), (m, b)]
+    return keep
+
+
+def _thin_spectrum(wl: np.ndarray, val: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Samples of a piecewise-linear spectrum that reproduce it within ``tol``: first the
+    inside of runs of equal values goes (exact), then Ramer-Douglas-Peucker."""
+    same = np.zeros(wl.size, dtype=bool)
+    same[1:-1] = (val[1:-1] == val[:-2]) & (val[1:-1] == val[2:])
+    wl, val = wl[~same], val[~same]
+    keep = _polyline_keep(wl, val[:, None], np.array([tol]))
+    return wl[keep], val[keep]
+
+
+def simplify(problem: Problem, rel_tol: float) -> Problem:
+    """A cheaper problem for searching: the spectrum and the CMFs on fewer nodes.
+
+    Nodes are dropped while the spectrum and every CMF channel, interpolated linearly over
+    the remaining nodes, stay within ``rel_tol`` of their maxima (table nodes are kept).
+    J of a table changes by about rel_tol (relative) on the lamps tried; the solvers search
+    on it and judge the result on the exact problem.
+    """
+    if rel_tol <= 0:
+        return problem
+    n = problem.n_nodes
+    x = problem.nodes[:n]
+    cols = [problem.spec[:n, None], problem.cmf[:n]]
+    if problem.batched:
+        cols.append(problem.refl[:, :n].T)
+    Y = np.column_stack(cols)
+    tol = rel_tol * np.maximum(np.max(Y, axis=0), 1e-300)
+    keep = _polyline_keep(x, Y, tol) | np.isin(x, problem.grid)
+    if not problem.batched:
+        return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4])
+    return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4],
+                       refl=Y[keep, 4:].T, weights=problem.weights,
+                       reflectance_set=problem.reflectance_set)
+
+
+# One compiled function, not a dozen one-operation ones (eager jnp on a NumPy array).
+_xyz_to_lab_jit = aot.DiskJit(jax.jit(colorimetry.xyz_to_lab), "xyz_to_lab")
