@@ -117,6 +117,17 @@ const std::vector<std::string> &EmissionWeights() {
     return w;
 }
 
+void EmissionWeightCurve(const std::string &weight, std::vector<double> *x, std::vector<double> *w) {
+    x->clear();
+    w->clear();
+    if (weight == "spd") return;
+    for (int i = 0; i < cie::kNumSamples; ++i) {
+        x->push_back(double(cie::kLambdaMin + i));
+        w->push_back(weight == "luminance" ? cie::CIE_Y[i]
+                                           : (cie::CIE_X[i] + cie::CIE_Y[i]) + cie::CIE_Z[i]);
+    }
+}
+
 EmissionTable SceneEmissionTable(const Scene &scene, const std::string &weight) {
     const std::vector<std::string> &known = EmissionWeights();
     if (std::find(known.begin(), known.end(), weight) == known.end())
@@ -125,13 +136,7 @@ EmissionTable SceneEmissionTable(const Scene &scene, const std::string &weight) 
     EmissionSpectrum e = SceneEmissionSpectrum(scene);
     // The weight at the CMFs' 1 nm nodes (none for "spd": the spectrum alone).
     std::vector<double> wx, wv;
-    if (weight != "spd") {
-        for (int i = 0; i < cie::kNumSamples; ++i) {
-            wx.push_back(double(cie::kLambdaMin + i));
-            wv.push_back(weight == "luminance" ? cie::CIE_Y[i]
-                                               : (cie::CIE_X[i] + cie::CIE_Y[i]) + cie::CIE_Z[i]);
-        }
-    }
+    EmissionWeightCurve(weight, &wx, &wv);
     EmissionTable t;
     t.weight = weight;
     t.emissionNodes = e.lambdas.size();

@@ -48,6 +48,10 @@ constexpr const char *kDefaultEmissionWeight = "spd";
 // Every weight --emission-weight accepts, in the order the help lists them.
 const std::vector<std::string> &EmissionWeights();
 
+// The weight's nodes and values: none for "spd" (w = 1, the spectrum alone), else ybar or
+// xbar + ybar + zbar at the CIE 1931 functions' 1 nm nodes 360..830 nm.
+void EmissionWeightCurve(const std::string &weight, std::vector<double> *x, std::vector<double> *w);
+
 struct EmissionTable {
     std::shared_ptr<const wavelength_table::Table> table;
     std::string weight;        // one of EmissionWeights()

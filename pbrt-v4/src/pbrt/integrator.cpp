@@ -33,11 +33,12 @@ namespace {
 // by MIS against BSDF sampling.
 SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const BSDF &bsdf,
                          const SampledWavelengths &lambda, Sampler &sampler,
-                         SampledSpectrumCache &spectra) {
+                         SampledSpectrumCache &spectra, int *lightOut) {
     Float uLight = sampler.Get1D();
     Point2f u = sampler.Get2D();
     Float pmf;
     int li = scene.lightSampler.Sample(uLight, &pmf);
+    *lightOut = li;
     if (li < 0 || pmf == 0) return SampledSpectrum(0);
     const Light &light = scene.lights[li];
     LightSampleContext ctx{si.p, si.n, si.pError};
@@ -64,7 +65,7 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
 }  // namespace
 
 SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
-                       Sampler &sampler, int maxDepth, int *depthOut) {
+                       Sampler &sampler, int maxDepth, int *depthOut, LightContributions *byLight) {
     SampledSpectrum L(0), beta(1);
     int depth = 0, skips = 0;
     Float p_b = 1, etaScale = 1;
@@ -96,12 +97,11 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                 const Light &light = scene.lights[li];
                 SampledSpectrum Le = light.Le(lambda, &spectra);
                 if (!Le.IsNonZero()) continue;
-                if (depth == 0 || specularBounce) {
-                    L += beta * Le;
-                } else {
-                    Float p_l = scene.lightSampler.PMF(li) * light.PDF_Li(prevCtx, ray.d, si);
-                    L += beta * Le * misWeight(p_l);
-                }
+                SampledSpectrum c = beta * Le;
+                if (depth != 0 && !specularBounce)
+                    c *= misWeight(scene.lightSampler.PMF(li) * light.PDF_Li(prevCtx, ray.d, si));
+                L += c;
+                if (byLight) byLight->Add(li, c);
             }
             break;
         }
@@ -111,13 +111,12 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
             const Light &light = scene.lights[si.areaLight];
             SampledSpectrum Le = light.L(si.n, si.wo, lambda, &spectra);
             if (Le.IsNonZero()) {
-                if (depth == 0 || specularBounce) {
-                    L += beta * Le;
-                } else {
-                    Float p_l = scene.lightSampler.PMF(si.areaLight) *
-                                light.PDF_Li(prevCtx, Normalize(ray.d), si);
-                    L += beta * Le * misWeight(p_l);
-                }
+                SampledSpectrum c = beta * Le;
+                if (depth != 0 && !specularBounce)
+                    c *= misWeight(scene.lightSampler.PMF(si.areaLight) *
+                                   light.PDF_Li(prevCtx, Normalize(ray.d), si));
+                L += c;
+                if (byLight) byLight->Add(si.areaLight, c);
             }
         }
 
@@ -144,7 +143,12 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
         if (depth++ == maxDepth) break;
         if (bsdf->IsBlack()) break;
 
-        if (bsdf->IsNonSpecular()) L += beta * SampleLd(scene, si, *bsdf, lambda, sampler, spectra);
+        if (bsdf->IsNonSpecular()) {
+            int li = -1;
+            SampledSpectrum c = beta * SampleLd(scene, si, *bsdf, lambda, sampler, spectra, &li);
+            L += c;
+            if (byLight && li >= 0) byLight->Add(li, c);
+        }
 
         // Continue the path in a BSDF-sampled direction.
         Float uc = sampler.Get1D();

@@ -2,6 +2,7 @@
 // fills it from kebab-case flags).
 #pragma once
 
+#include <pbrt/guiding.h>
 #include <pbrt/util/vecmath.h>
 
 #include <array>
@@ -61,6 +62,18 @@ struct RenderOptions {
     // --emission-table FILE: write the table --wavelength-sampling emission would sample from
     // (design §2 layout) instead of rendering.
     std::string emissionTable;
+    // --wavelength-guiding (design §1.8, §5.2): a pre-pass chooses each pixel's table among at
+    // most guidingTables tables of the light mixtures it finds (guiding.h). The scene's emission
+    // table (with emissionWeight) is built as for "emission"; the pre-pass samples with it.
+    bool wavelengthGuiding = false;
+    double guidingPrepassShare = kDefaultGuidingPrepassShare;  // --guiding-prepass-share F in (0, 1]
+    int guidingTables = kDefaultGuidingTables;                 // --guiding-tables K in [1, 16]
+    double guidingDefensive = kDefaultGuidingDefensive;        // --guiding-defensive S in (0, 1]
+    int guidingTile = kDefaultGuidingTile;                     // --guiding-tile N in [1, 256]
+    std::string guidingTablesDir;         // --wavelength-guiding-tables DIR: optimized tables
+    // --wavelength-guiding-spectra DIR: write the tables' mixture spectra (the pre-pass's
+    // result) instead of rendering.
+    std::string guidingSpectraDir;
 };
 
 }  // namespace pbrt

@@ -1,5 +1,6 @@
 #include <pbrt/render.h>
 
+#include <pbrt/guiding.h>
 #include <pbrt/scene.h>
 #include <pbrt/util/progress.h>
 
@@ -76,7 +77,7 @@ void WarnNonFinite(const Scene &scene, const Ray &cameraRay) {
 }  // namespace
 
 RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthRepeats,
-                   const std::function<void(int sppDone)> &afterPass) {
+                   const std::function<void(int sppDone)> &afterPass, const WavelengthGuide *guide) {
     std::unique_ptr<tbb::global_control> limit;
     if (nThreads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(nThreads));
@@ -105,6 +106,8 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                 for (int y = y0; y < y1; ++y)
                     for (int x = x0; x < x1; ++x) {
                         Point2i p{x, y};
+                        // Wavelength guiding: the pixel's own table (design §1.8).
+                        const WavelengthSampler &wavelengths = guide ? guide->SamplerAt(p) : scene.wavelengths;
                         for (int s = s0; s < s1; ++s) {
                             RGB rgb(0, 0, 0);
                             FilterSample fs;
@@ -124,7 +127,7 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                                     uLambda += Float(r) / Float(repeats);
                                     uLambda -= std::floor(uLambda);
                                 }
-                                SampledWavelengths lambda = scene.wavelengths.Sample(uLambda);
+                                SampledWavelengths lambda = wavelengths.Sample(uLambda);
                                 Point2f uLens = sampler.Get2D();
                                 Ray ray = scene.camera->GenerateRay(pFilm, uLens);
                                 int depth = 0;

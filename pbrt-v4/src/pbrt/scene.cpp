@@ -665,7 +665,7 @@ void SceneBuilder::EndOfFiles() {
                                            opts, film.loc);
     CheckUnused(filmDict, "Film \"" + film.name + "\"");
     if (opts.outfile.empty() && opts.emissionSpectrum.empty() && opts.materialReflectances.empty() &&
-        opts.emissionTable.empty()) {
+        opts.emissionTable.empty() && opts.guidingSpectraDir.empty()) {
         try {
             CheckOutputImagePath(fs.filename);
         } catch (const PbrtError &e) {
@@ -710,14 +710,18 @@ void SceneBuilder::EndOfFiles() {
     Light::ShareEqualSpectra(scene->lights);
     for (Light &l : scene->lights) l.Preprocess(scene->accel->Bounds());
     scene->lightSampler = LightSampler(scene->lights);
+    const bool emission = opts.wavelengthSampling == "emission" || opts.wavelengthGuiding;
     if (scene->lights.empty())
-        Warning(opts.wavelengthSampling == "emission"
+        Warning(opts.wavelengthGuiding
+                    ? "the scene has no lights; the image will be black (--wavelength-guiding "
+                      "has no emission to sample: visible sampling instead)"
+                : opts.wavelengthSampling == "emission"
                     ? "the scene has no lights; the image will be black (--wavelength-sampling "
                       "emission has no emission to sample: visible sampling instead)"
                     : "the scene has no lights; the image will be black");
     // Emission sampling (design §1.7, §5.2): a table from the lights' power, which needs the
     // scene's bounds (infinite lights); a light that makes it impossible stops pbrt here.
-    if (opts.wavelengthSampling == "emission" && !scene->lights.empty()) {
+    if (emission && !scene->lights.empty()) {
         EmissionTable t = SceneEmissionTable(*scene, opts.emissionWeight);
         scene->wavelengths = WavelengthSampler::FromEmission(t.table, t.weight, t.seconds);
     }

@@ -46,6 +46,11 @@ Float TableWavelengthSampler::MaxLambda() const { return Float(table->grid.back(
 
 std::string TableWavelengthSampler::Description() const {
     std::ostringstream s;
+    if (!guided.empty()) {
+        s << "guided table " << guided << " (" << table->grid.size() << " nodes, "
+          << table->grid.front() << ".." << table->grid.back() << " nm)";
+        return s.str();
+    }
     if (!emissionWeight.empty()) {
         s << "emission (the scene's emitted power"
           << (emissionWeight == "luminance" ? " times ybar"
@@ -98,6 +103,14 @@ WavelengthSampler WavelengthSampler::FromEmission(std::shared_ptr<const waveleng
     return WavelengthSampler(std::move(t));
 }
 
+WavelengthSampler WavelengthSampler::FromGuided(std::shared_ptr<const wavelength_table::Table> table,
+                                                const std::string &label) {
+    TableWavelengthSampler t;
+    t.table = std::move(table);
+    t.guided = label;
+    return WavelengthSampler(std::move(t));
+}
+
 WavelengthSampler WavelengthSampler::Visible() { return WavelengthSampler(VisibleWavelengthSampler{}); }
 
 WavelengthSampler WavelengthSampler::Uniform(Float lmin, Float lmax) {
@@ -136,7 +149,9 @@ bool WavelengthSampler::IsTable() const {
 std::string WavelengthSampler::Name() const {
     if (std::holds_alternative<VisibleWavelengthSampler>(impl)) return "visible";
     if (std::holds_alternative<UniformWavelengthSampler>(impl)) return "uniform";
-    return std::get<TableWavelengthSampler>(impl).emissionWeight.empty() ? "table" : "emission";
+    const TableWavelengthSampler &t = std::get<TableWavelengthSampler>(impl);
+    if (!t.guided.empty()) return "guided";
+    return t.emissionWeight.empty() ? "table" : "emission";
 }
 
 std::vector<std::pair<Float, Float>> WavelengthSampler::ZeroDensityIntervals() const {

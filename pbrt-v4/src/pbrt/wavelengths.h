@@ -59,6 +59,7 @@ struct TableWavelengthSampler {
     std::string sha256;  // SHA-256 of the bytes read from it (hexadecimal)
     std::string emissionWeight;  // emission sampling: its weight (spd, luminance, xyz)
     double buildSeconds = 0;     // emission sampling: the time to build the table
+    std::string guided;          // one of wavelength guiding's tables (guiding.h): what it is
     SampledWavelengths Sample(Float u) const;
     Float PDF(Float lambda) const;
     std::string Description() const;
@@ -80,6 +81,10 @@ class WavelengthSampler {
     // built with `weight` in `buildSeconds`; sampled exactly as a table file is.
     static WavelengthSampler FromEmission(std::shared_ptr<const wavelength_table::Table> table,
                                           const std::string &weight, double buildSeconds);
+    // One of wavelength guiding's per-pixel tables (guiding.h), built in memory; `label` says
+    // which (its mixture and source). Sampled exactly as a table file is.
+    static WavelengthSampler FromGuided(std::shared_ptr<const wavelength_table::Table> table,
+                                        const std::string &label);
 
     // Four wavelengths (and the per-wavelength densities the film divides by) from one u.
     SampledWavelengths Sample(Float u) const;
@@ -91,7 +96,8 @@ class WavelengthSampler {
     Float MaxLambda() const;
     // Whether this samples from a table (FromTable or FromEmission).
     bool IsTable() const;
-    // "visible", "uniform", "table" or "emission": the kind, as the command line names it.
+    // "visible", "uniform", "table", "emission" or "guided": the kind, as the command line
+    // names it.
     std::string Name() const;
     // The table sampler (its file, hash and defensive share, or its emission weight);
     // nullptr unless IsTable().

@@ -1,5 +1,6 @@
 // pbrt: renders pbrt-v4 scene files with the spectral path tracer.
 #include <pbrt/emission.h>
+#include <pbrt/guiding.h>
 #include <pbrt/options.h>
 #include <pbrt/render.h>
 #include <pbrt/scene.h>
@@ -77,6 +78,34 @@ Wavelengths (four per path from one random number):
   --wavelength-pdf-defensive S mix a uniform share S in [0, 1] into each density of the
                                table, over the table's range (e.g. 0.01): removes zero
                                sampling density where a light emits, which biases the image
+  --wavelength-guiding         each pixel samples the lamps that light it (design §1.8):
+                               a short pre-pass (its own random numbers, not in the image)
+                               measures which kinds of light reach each tile of pixels;
+                               their mixtures are clustered into at most K tables (the
+                               emission construction of each mixture, with a defensive
+                               share of the whole scene's emission); each pixel draws its
+                               wavelengths from its tile's table. One kind of light: one
+                               table, exactly --wavelength-sampling emission's. The EXR
+                               gets a channel wavelengthTable.index; OUT.guiding/ beside
+                               the image holds the tables (table-K.csv), clusters.csv,
+                               kinds.csv and tiles.csv. Takes --emission-weight
+  --guiding-prepass-share F    pre-pass paths per pixel, as a share of --spp (default 0.03;
+                               at least 16 paths per tile), in (0, 1]
+  --guiding-tables K           at most K tables, 1..16 (default 8; fewer when mixtures
+                               coincide)
+  --guiding-defensive S        share S in (0, 1] of the scene's whole emission in every
+                               table (default 0.05): a lamp the pre-pass missed is still
+                               sampled, so the image stays unbiased
+  --guiding-tile N             pixels per side of a pre-pass tile, 1..256 (default 8)
+  --wavelength-guiding-tables DIR
+                               optimized tables for the mixtures: DIR/mixture-HASH.csv
+                               (from wavelength-pdf batch on the spectra below), each
+                               mixed with the defensive share
+  --wavelength-guiding-spectra DIR
+                               render nothing: run the pre-pass and write each table's
+                               mixture spectrum to DIR/mixture-HASH.spd (and clusters.csv);
+                               give the render's own --spp, resolution and --guiding-*
+                               options, so that the render chooses the same mixtures
   --wavelength-repeats K       trace each camera sample K times with the same random
                                numbers but the wavelength number shifted by k/K, and
                                average: wavelength noise averaged away at K times the cost
@@ -213,6 +242,7 @@ int main(int argc, char **argv) {
     RenderOptions opts;
     std::vector<std::string> files;
     bool hasDefensive = false, hasBuiltinSampling = false, hasRange = false, hasWeight = false;
+    std::string guidingOption;  // a --guiding-* option given (it needs --wavelength-guiding)
     bool logUtilization = false, hasLogLevel = false;
     std::vector<std::string> ignored;  // accepted flags that change nothing here
 
@@ -355,6 +385,33 @@ int main(int argc, char **argv) {
         } else if (flag == "--wavelength-pdf") {
             opts.wavelengthTable = value();
             if (opts.wavelengthTable.empty()) Usage("--wavelength-pdf needs a file name");
+        } else if (flag == "--wavelength-guiding") {
+            opts.wavelengthGuiding = true;
+        } else if (flag == "--guiding-prepass-share") {
+            guidingOption = flag;
+            opts.guidingPrepassShare = ParseFloat(flag, value());
+            if (!(opts.guidingPrepassShare > 0 && opts.guidingPrepassShare <= 1))
+                Usage("--guiding-prepass-share: expected a share in (0, 1]");
+        } else if (flag == "--guiding-tables") {
+            guidingOption = flag;
+            opts.guidingTables = int(ParseInt(flag, value(), 1, kMaxGuidingTables));
+        } else if (flag == "--guiding-defensive") {
+            guidingOption = flag;
+            opts.guidingDefensive = ParseFloat(flag, value());
+            if (!(opts.guidingDefensive > 0 && opts.guidingDefensive <= 1))
+                Usage("--guiding-defensive: expected a share in (0, 1] (0 would leave lamps the "
+                      "pre-pass missed unsampled: a biased image)");
+        } else if (flag == "--guiding-tile") {
+            guidingOption = flag;
+            opts.guidingTile = int(ParseInt(flag, value(), 1, kMaxGuidingTile));
+        } else if (flag == "--wavelength-guiding-tables") {
+            guidingOption = flag;
+            opts.guidingTablesDir = value();
+            if (opts.guidingTablesDir.empty()) Usage("--wavelength-guiding-tables needs a folder");
+        } else if (flag == "--wavelength-guiding-spectra") {
+            guidingOption = flag;
+            opts.guidingSpectraDir = value();
+            if (opts.guidingSpectraDir.empty()) Usage("--wavelength-guiding-spectra needs a folder");
         } else if (flag == "--wavelength-repeats") {
             opts.wavelengthRepeats = int(ParseInt(flag, value(), 1, 1 << 16));
         } else if (flag == "--wavelength-pdf-defensive") {
@@ -377,8 +434,22 @@ int main(int argc, char **argv) {
     if (hasRange && opts.wavelengthSampling == "emission")
         Usage("--wavelength-range is for uniform sampling; emission sampling covers 360-830 nm "
               "(wherever the scene's lights emit)");
-    if (hasWeight && opts.wavelengthSampling != "emission" && opts.emissionTable.empty())
-        Usage("--emission-weight needs --wavelength-sampling emission (or --emission-table)");
+    if (hasWeight && opts.wavelengthSampling != "emission" && opts.emissionTable.empty() &&
+        !opts.wavelengthGuiding)
+        Usage("--emission-weight needs --wavelength-sampling emission, --wavelength-guiding or "
+              "--emission-table");
+    if (!guidingOption.empty() && !opts.wavelengthGuiding)
+        Usage(guidingOption + " needs --wavelength-guiding");
+    if (opts.wavelengthGuiding && (hasBuiltinSampling || !opts.wavelengthTable.empty()))
+        Usage("--wavelength-guiding chooses each pixel's wavelength sampling itself: give no "
+              "--wavelength-sampling, --wavelength-range or --wavelength-pdf with it");
+    if (!opts.guidingSpectraDir.empty() && !opts.guidingTablesDir.empty())
+        Usage("--wavelength-guiding-spectra writes the mixtures that --wavelength-guiding-tables "
+              "reads the optimized tables of: give one or the other");
+    if (!opts.guidingSpectraDir.empty() &&
+        (!opts.emissionSpectrum.empty() || !opts.materialReflectances.empty() || !opts.emissionTable.empty()))
+        Usage("--wavelength-guiding-spectra is a query of its own: run --emission-spectrum, "
+              "--material-reflectances and --emission-table separately");
 
     // Logging, before anything can warn. A log file implies verbose logging (pbrt-v4).
     std::unique_ptr<std::FILE, int (*)(std::FILE *)> logFile(nullptr, &std::fclose);
@@ -438,6 +509,42 @@ int main(int argc, char **argv) {
                              opts.materialReflectances.c_str(), m->labels.size());
             return 0;
         }
+        std::string source;
+        for (const std::string &f : files) source += (source.empty() ? "" : " ") + f;
+        if (source.empty()) source = "<standard input>";
+        GuidingSettings guiding;
+        guiding.prepassShare = opts.guidingPrepassShare;
+        guiding.maxTables = opts.guidingTables;
+        guiding.defensive = opts.guidingDefensive;
+        guiding.tile = opts.guidingTile;
+        guiding.weight = opts.emissionWeight;
+        guiding.tablesDir = opts.guidingTablesDir;
+        if (!opts.guidingTablesDir.empty()) {
+            std::error_code ec;
+            if (!std::filesystem::is_directory(opts.guidingTablesDir, ec))
+                throw PbrtError("--wavelength-guiding-tables \"" + opts.guidingTablesDir +
+                                "\": not a folder");
+        }
+        if (!opts.guidingSpectraDir.empty()) {
+            // Wavelength guiding's query (design §5.2): the pre-pass and the mixtures, no image.
+            std::error_code ec;
+            std::filesystem::path dir(opts.guidingSpectraDir);
+            if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+                throw PbrtError("--wavelength-guiding-spectra \"" + opts.guidingSpectraDir + "\": not a folder");
+            // The folder (made when missing) must be writable, or its parent when it is missing.
+            CheckOutputFilePath(std::filesystem::is_directory(dir, ec) ? (dir / "clusters.csv").string()
+                                                                       : dir.string());
+            std::unique_ptr<Scene> scene = LoadScene(files, opts);
+            if (scene->lights.empty()) (void)SceneEmissionSpectrum(*scene);  // "no emitters"
+            WavelengthGuide guide = BuildWavelengthGuide(*scene, guiding, opts.nThreads, opts.quiet);
+            WriteGuidingSpectra(opts.guidingSpectraDir, guide, source);
+            if (!opts.quiet)
+                std::fprintf(stderr, "pbrt: wrote %zu mixture spectra to %s (%zu kinds of light, pre-pass "
+                                     "%d paths per tile of %dx%d, %.3g s CPU)\n",
+                             guide.tables.size(), opts.guidingSpectraDir.c_str(), guide.kinds.size(),
+                             guide.prepassPathsPerTile, guide.tile, guide.tile, guide.cpuSeconds);
+            return 0;
+        }
         if (!opts.outfile.empty()) CheckOutputImagePath(opts.outfile);
         if (!opts.mseReferenceOut.empty()) CheckOutputFilePath(opts.mseReferenceOut);
         // The reference is read before the scene: a bad one stops pbrt before any work.
@@ -445,6 +552,13 @@ int main(int argc, char **argv) {
         if (!opts.mseReference.empty()) reference = ReadImage(opts.mseReference, false);
         std::unique_ptr<Scene> scene = LoadScene(files, opts);
         std::string outfile = opts.outfile.empty() ? scene->film->Settings().filename : opts.outfile;
+        std::optional<WavelengthGuide> guide;
+        if (opts.wavelengthGuiding) {
+            std::error_code ec;
+            const std::string dir = GuidingOutputDir(outfile);
+            if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+                throw PbrtError("\"" + dir + "\": the guiding output folder's name is taken by a file");
+        }
         const FilmSettings &fs = scene->film->Settings();
         if (reference) CheckMSEReference(opts.mseReference, *reference, fs);
         if (!opts.quiet)
@@ -456,6 +570,16 @@ int main(int argc, char **argv) {
                 ", pixel bounds [" + std::to_string(fs.pixelBounds.pMin.x) + ", " + std::to_string(fs.pixelBounds.pMax.x) +
                 ") x [" + std::to_string(fs.pixelBounds.pMin.y) + ", " + std::to_string(fs.pixelBounds.pMax.y) +
                 "), camera " + scene->camera->Description() + ", output " + outfile);
+
+        // Wavelength guiding: the pre-pass and the tables count in the render's time.
+        if (opts.wavelengthGuiding && scene->wavelengths.IsTable())
+            guide = BuildWavelengthGuide(*scene, guiding, opts.nThreads, opts.quiet);
+        if (guide && !opts.quiet)
+            std::fprintf(stderr, "pbrt: wavelength guiding: %zu table%s for %zu kinds of light, pre-pass "
+                                 "%d paths per tile of %dx%d pixels, %.3g s CPU, %zu bytes\n",
+                         guide->tables.size(), guide->tables.size() == 1 ? "" : "s", guide->kinds.size(),
+                         guide->prepassPathsPerTile, guide->tile, guide->tile, guide->cpuSeconds,
+                         guide->MemoryBytes());
 
         // Passes only when something is done between them (pbrt-v4's waves).
         std::ofstream mseOut;
@@ -472,8 +596,17 @@ int main(int argc, char **argv) {
                     Verbose("wrote the partial image " + outfile + " at " + std::to_string(sppDone) + " spp");
                 }
             };
-        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet, opts.wavelengthRepeats, afterPass);
+        RenderStats stats = Render(*scene, opts.nThreads, opts.quiet, opts.wavelengthRepeats, afterPass,
+                                   guide ? &*guide : nullptr);
+        if (guide) {
+            stats.cpuSeconds += guide->cpuSeconds;
+            stats.wallSeconds += guide->wallSeconds;
+        }
         ImageMetadata metadata = RenderMetadata(*scene, stats);
+        if (guide) {
+            AddGuidingMetadata(metadata, *guide);
+            WriteGuidingOutputs(outfile, *guide, source);
+        }
         std::optional<double> mse;
         if (reference) metadata.floats["MSE"] = float(*(mse = MeanSquaredError(scene->film->GetImage(), *reference)));
         scene->film->WriteImage(outfile, metadata);

@@ -190,9 +190,24 @@ void WriteEXR(const std::string &path, const std::string &target, const Image &i
             fb.insert(names[size_t(c)],
                       Imf::Slice::Make(Imf::FLOAT, const_cast<float *>(image.pixels.data() + c), dataWindow,
                                        xStride, yStride));
+        // Extra channels share the data window; a name the image already uses would make
+        // OpenEXR silently keep one of the two, so it is an error.
+        for (const auto &[name, values] : metadata.channels) {
+            if (values.size() != size_t(image.width) * size_t(image.height))
+                throw FileError(target, "channel \"" + name + "\" has " + std::to_string(values.size()) +
+                                            " values for " + std::to_string(image.width) + "x" +
+                                            std::to_string(image.height) + " pixels");
+            if (std::find(names.begin(), names.end(), name) != names.end())
+                throw FileError(target, "channel \"" + name + "\" is one of the image's own channels");
+            header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+            fb.insert(name, Imf::Slice::Make(Imf::FLOAT, const_cast<float *>(values.data()), dataWindow,
+                                             sizeof(float), sizeof(float) * size_t(image.width)));
+        }
         Imf::OutputFile file(path.c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(image.height);
+    } catch (const PbrtError &) {
+        throw;
     } catch (const std::exception &e) {
         throw FileError(target, std::string("cannot write EXR image: ") + e.what());
     }

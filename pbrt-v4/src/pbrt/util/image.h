@@ -52,6 +52,9 @@ struct ImageMetadata {
     std::map<std::string, float> floats;
     std::map<std::string, std::array<float, 2>> float2s;
     std::map<std::string, std::string> strings;
+    // EXR only: further 32-bit float channels by name (such as "wavelengthTable.index"), each
+    // width x height values, row by row, top row first.
+    std::map<std::string, std::vector<float>> channels;
     // 4 x 4 matrices (EXR m44f), m[4 i + j] row i, column j, as pbrt-v4 stores its
     // transformations ("worldToCamera", "worldToNDC").
     std::map<std::string, std::array<float, 16>> matrices;
