@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 from wavelength_pdf.cli import main
-from wavelength_pdf.evaluation import cluster, commands, render as rendering
+from wavelength_pdf.cli import evaluate as commands
+from wavelength_pdf.evaluation import cluster, render as rendering
 from wavelength_pdf.evaluation.protocol import Config, evaluate, merge_chunks, merge_truth, plan
 from wavelength_pdf.exr import read_rgb
 from wavelength_pdf.spectra import load_spectrum
