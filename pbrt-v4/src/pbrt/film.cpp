@@ -201,13 +201,12 @@ Image RGBFilm::GetImage() const {
     img.channels = c;
     img.channelNames = {"R", "G", "B"};
     for (int k = 0; k < n; ++k) {
-        char name[64];
-        std::snprintf(name, sizeof(name), "S0.%.3fnm",
+        char centre[64];
+        std::snprintf(centre, sizeof(centre), "%.3f",
                       double(settings.lambdaMin) + (k + 0.5) * double(settings.lambdaMax - settings.lambdaMin) / n);
-        std::string s = name;
-        std::replace(s.begin(), s.end(), '.', ',');
-        s[2] = '.';
-        img.channelNames.push_back(s);
+        std::string nm = centre;
+        std::replace(nm.begin(), nm.end(), '.', ',');
+        img.channelNames.push_back("S0." + nm + "nm");
     }
     std::vector<float> rgb = std::move(img.pixels);
     img.pixels.assign(pixels.size() * size_t(c), 0.f);
