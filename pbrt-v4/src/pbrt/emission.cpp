@@ -153,18 +153,6 @@ EmissionTable SceneEmissionTable(const Scene &scene, const std::string &weight) 
     return t;
 }
 
-// Writes `path` through `body` (which returns false when a write failed) under a temporary
-// name, renamed into place only when every write succeeded: never a partial file.
-template <typename Body>
-static void WriteAtomically(const std::string &path, Body body) {
-    TemporaryOutput tmp(path);  // removed on an error or a SIGTERM (util/output_path.h)
-    FILE *f = std::fopen(tmp.Path().c_str(), "w");
-    if (!f) throw PbrtError("\"" + path + "\": cannot be written");
-    bool ok = body(f);
-    ok = (std::fclose(f) == 0) && ok;
-    if (!ok || !tmp.Commit()) throw PbrtError("\"" + path + "\": writing failed");
-}
-
 void WriteEmissionSpectrum(const std::string &path, const EmissionSpectrum &s) {
     WriteAtomically(path, [&](FILE *f) {
         bool ok = std::fprintf(f,

@@ -7,6 +7,7 @@
 #include <pbrt/scene.h>
 #include <pbrt/util/cie_data.h>
 #include <pbrt/util/hash.h>
+#include <pbrt/util/output_path.h>
 #include <pbrt/util/progress.h>
 
 #include <wavelength_table.h>
@@ -344,19 +345,10 @@ std::string ReadFileOrEmpty(const fs::path &p) {
     return s.str();
 }
 
-// Writes `text` to `path` under a temporary name renamed into place: never a partial file.
+// Writes `text` to `path` under a temporary name renamed into place (util/output_path.h).
 void WriteTextAtomically(const fs::path &path, const std::string &text) {
-    const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
-    FILE *f = std::fopen(tmp.c_str(), "w");
-    if (!f) throw PbrtError("\"" + path.string() + "\": cannot be written");
-    bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    ok = (std::fclose(f) == 0) && ok;
-    std::error_code ec;
-    if (ok) fs::rename(tmp, path, ec);
-    if (!ok || ec) {
-        fs::remove(tmp, ec);
-        throw PbrtError("\"" + path.string() + "\": writing failed");
-    }
+    WriteAtomically(path.string(),
+                    [&](std::FILE *f) { return std::fwrite(text.data(), 1, text.size(), f) == text.size(); });
 }
 
 std::string TableText(const WavelengthGuide &g, size_t k) {

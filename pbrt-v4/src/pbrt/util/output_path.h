@@ -6,6 +6,9 @@
 // when it is killed (SIGKILL): the next run that writes beside it removes the stale one.
 #pragma once
 
+#include <pbrt/pbrt.h>
+
+#include <cstdio>
 #include <string>
 
 namespace pbrt {
@@ -49,5 +52,18 @@ class TemporaryOutput {
     int slot = -1;  // in the signal handler's table; -1 when not registered
     bool done = false;
 };
+
+// Writes `path` through body(FILE *) -> bool (false: a write failed) under a TemporaryOutput,
+// renamed into place only when every write succeeded: never a partial file. Throws PbrtError
+// ("\"PATH\": cannot be written" / "writing failed").
+template <typename Body>
+void WriteAtomically(const std::string &path, Body body) {
+    TemporaryOutput tmp(path);
+    std::FILE *f = std::fopen(tmp.Path().c_str(), "w");
+    if (!f) throw PbrtError("\"" + path + "\": cannot be written");
+    bool ok = body(f);
+    ok = (std::fclose(f) == 0) && ok;
+    if (!ok || !tmp.Commit()) throw PbrtError("\"" + path + "\": writing failed");
+}
 
 }  // namespace pbrt
