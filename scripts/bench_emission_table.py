@@ -5,7 +5,7 @@ For each scene (the six evaluation scenes of ``../shared/scenes`` and the projec
 boxes) and each weight, runs ``pbrt --emission-table`` ``--runs`` times and prints the median
 and the largest of the times ``pbrt`` reports for the whole build: the scene's emitted power
 (every light), the weight and the equal-mass cuts (the scene's parsing is not included). With
-``--upstream PATH`` (a pbrt-v4 patched by patches/pbrt-v4), also the time the patched binary
+``--upstream PATH`` (a pbrt-v4 patched by integrations/pbrt-v4), also the time the patched binary
 reports, rendering one pixel with ``--wavelength-sampling emission``.
 
 Usage::

@@ -57,7 +57,7 @@ import sys
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "optimizer"))
+sys.path.insert(0, str(ROOT / "python"))
 from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402
 
 CHECK_DIR = ROOT.parent / "upstream-check"  # scripts/check_upstream_patch.sh's default
@@ -140,7 +140,7 @@ def child_cpu(cmd: list[str], what: str) -> float:
 def mitsuba_available() -> str | None:
     """None when Mitsuba 3 with an LLVM for its llvm variants can run, else the reason."""
     proc = subprocess.run([sys.executable, "-c", MITSUBA_WORKER.split("xml, spp")[0]
-                           + "print(mi.variant())\n", str(ROOT / "optimizer"), MITSUBA_VARIANT],
+                           + "print(mi.variant())\n", str(ROOT / "python"), MITSUBA_VARIANT],
                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if proc.returncode != 0:
         lines = [line for line in proc.stderr.splitlines() if line.strip()]
@@ -165,7 +165,7 @@ def crosscheck_box(pbrt: pathlib.Path, spp: int, reps: int, nthreads: int, tmp: 
             print(f"  Mitsuba {MITSUBA_VARIANT} not measured: {reason}")
         else:
             runners[f"mitsuba {MITSUBA_VARIANT}"] = lambda: child_cpu(
-                [sys.executable, "-c", MITSUBA_WORKER, str(ROOT / "optimizer"), MITSUBA_VARIANT,
+                [sys.executable, "-c", MITSUBA_WORKER, str(ROOT / "python"), MITSUBA_VARIANT,
                  str(BOX_XML), str(spp), str(MITSUBA_PASS_SPP), str(MITSUBA_MAX_DEPTH)], "mitsuba")
     cpu: dict[str, list[float]] = {r: [] for r in runners}
     try:

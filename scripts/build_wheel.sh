@@ -10,7 +10,7 @@ Usage: bash scripts/build_wheel.sh [--out DIR] [--with-pbrt PATH] [--no-build-is
 
 Builds wavelength_pdf-VERSION-py3-none-any.whl into dist/ from the files git tracks in this
 checkout (their current contents), copied to a temporary folder first, and prints its path.
-Install it with its extras, e.g.  pip install "dist/wavelength_pdf-VERSION-py3-none-any.whl[mitsuba]"
+Install it with its extras, e.g.  pip install "dist/wavelength_pdf-VERSION-py3-none-any.whl[evaluation,mitsuba]"
 (extras: mitsuba, ipopt).
 
 Options:
@@ -81,7 +81,7 @@ git -C "$ROOT" ls-files -z --cached |
   done |
   tar -C "$ROOT" --null -T - -cf - | tar -C "$SRC" -xf -
 if [ -n "$PBRT_BIN" ]; then
-  install -D -m 755 "$PBRT_BIN" "$SRC/optimizer/wavelength_pdf/_bin/pbrt"
+  install -D -m 755 "$PBRT_BIN" "$SRC/python/wavelength_pdf/_bin/pbrt"
 fi
 
 "$PY" -m pip wheel --no-deps -q "${ISOLATION[@]}" "${CONFIG[@]}" -w "$TMP/out" "$SRC" >&2

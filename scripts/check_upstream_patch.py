@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "optimizer"))
+sys.path.insert(0, str(ROOT / "python"))
 
 from wavelength_pdf.evaluation.metrics import delta_e_map  # noqa: E402
 from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402

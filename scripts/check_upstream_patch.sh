@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Check the wavelength-pdf patch (patches/pbrt-v4/) on a real upstream pbrt-v4 tree.
+# Check the wavelength-pdf patch (integrations/pbrt-v4/) on a real upstream pbrt-v4 tree.
 #
 #   scripts/check_upstream_patch.sh [UPSTREAM_DIR]     (default ../shared/upstream/pbrt-v4)
 #
 # Copies the tree twice under $UPSTREAM_CHECK_DIR (default ../upstream-check, outside the
-# repository): unpatched/ and patched/ (the latter with patches/pbrt-v4/apply.py applied),
+# repository): unpatched/ and patched/ (the latter with integrations/pbrt-v4/apply.py applied),
 # builds both Release for the CPU (ninja pbrt_exe, -j$JOBS, default 2; ccache when installed,
 # with CCACHE_BASEDIR so the patched build reuses the unpatched build's objects), then runs
 # scripts/check_upstream_patch.py: (a) bit-identical without the flag, (b) unbiased with a
@@ -77,7 +77,7 @@ t0=$(date +%s)
 copy_tree "$WORK/unpatched/pbrt-v4"
 copy_tree "$WORK/patched/pbrt-v4"
 echo "== applying the patch to $WORK/patched/pbrt-v4"
-"$PYTHON" "$REPO/patches/pbrt-v4/apply.py" "$WORK/patched/pbrt-v4"
+"$PYTHON" "$REPO/integrations/pbrt-v4/apply.py" "$WORK/patched/pbrt-v4"
 build "$WORK/unpatched"
 build "$WORK/patched"
 echo "== builds done in $(( $(date +%s) - t0 )) s"

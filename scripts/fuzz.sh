@@ -10,12 +10,12 @@
 #                                         scripts/test.sh runs), then 30 s per target
 #
 # Targets: scene_fuzz (tokenizer, parser, scene builder), ply_fuzz (PLY reader), table_fuzz
-# (patches/include/wavelength_table.h). Each starts from the seeds in the repository
-# (pbrt-v4/fuzz/corpus/<kind>, patches/fuzz/corpus/table) and the inputs that once crashed
+# (wavelength_table/include/wavelength_table.h). Each starts from the seeds in the repository
+# (renderer/fuzz/corpus/<kind>, wavelength_table/fuzz/corpus/table) and the inputs that once crashed
 # (.../regressions/<kind>); new interesting inputs collect in build-fuzz/corpus/<target>,
 # crashes in build-fuzz/artifacts/. A crash, sanitizer report, hang (> 10 s per input), leak
 # or more than 2 GB of memory fails the run; keep the input as a regression (see
-# pbrt-v4/fuzz/README.md). Logs: build-fuzz/logs/<target>.log; the summary line of each
+# renderer/fuzz/README.md). Logs: build-fuzz/logs/<target>.log; the summary line of each
 # target prints its executions and coverage.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -63,16 +63,16 @@ fi
 # --- Fuzzing -------------------------------------------------------------------------------------------
 seeds() {
   case $1 in
-    scene_fuzz) echo "pbrt-v4/fuzz/corpus/scene pbrt-v4/fuzz/regressions/scene" ;;
-    ply_fuzz) echo "pbrt-v4/fuzz/corpus/ply pbrt-v4/fuzz/regressions/ply" ;;
-    table_fuzz) echo "patches/fuzz/corpus/table patches/fuzz/regressions/table" ;;
+    scene_fuzz) echo "renderer/fuzz/corpus/scene renderer/fuzz/regressions/scene" ;;
+    ply_fuzz) echo "renderer/fuzz/corpus/ply renderer/fuzz/regressions/ply" ;;
+    table_fuzz) echo "wavelength_table/fuzz/corpus/table wavelength_table/fuzz/regressions/table" ;;
   esac
 }
 dict() {
   case $1 in
-    scene_fuzz) echo "-dict=pbrt-v4/fuzz/scene.dict" ;;
-    ply_fuzz) echo "-dict=pbrt-v4/fuzz/ply.dict" ;;
-    table_fuzz) echo "-dict=patches/fuzz/table.dict" ;;
+    scene_fuzz) echo "-dict=renderer/fuzz/scene.dict" ;;
+    ply_fuzz) echo "-dict=renderer/fuzz/ply.dict" ;;
+    table_fuzz) echo "-dict=wavelength_table/fuzz/table.dict" ;;
   esac
 }
 fuzz_one() {

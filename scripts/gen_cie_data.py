@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Write the renderer's CIE data tables (pbrt-v4/src/pbrt/util/cie_data.{h,cpp}).
+"""Write the renderer's CIE data tables (renderer/src/pbrt/util/cie_data.{h,cpp}).
 
 The tables are published colorimetric data, read from colour-science (which carries the
 CIE's tables):
@@ -148,7 +148,7 @@ def main() -> None:
     """Command-line entry: write the header and the source into --outdir."""
     root = Path(__file__).resolve().parent.parent
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--outdir", type=Path, default=root / "pbrt-v4" / "src" / "pbrt" / "util")
+    parser.add_argument("--outdir", type=Path, default=root / "renderer" / "src" / "pbrt" / "util")
     args = parser.parse_args()
     cmfs = build_cmfs()
     illums = build_illuminants()

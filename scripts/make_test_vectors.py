@@ -12,14 +12,14 @@ with awkward features, samples it with that module's public functions only, and 
   xbar + ybar + zbar), and the tables ``wavelength_pdf.stratified.equal_mass_table`` (the
   reference of design §1.7) builds from them.
 
-The C++ test ``patches/tests/wavelength_table_test.cpp`` reads them; the sampler must agree to
+The C++ test ``wavelength_table/tests/wavelength_table_test.cpp`` reads them; the sampler must agree to
 1e-5 relative, ``wavelength_table::EqualMassTable`` to 1e-12 (same grid, same densities).
 ``tests/test_vectors.py`` regenerates every file and checks that they equal the committed
 files, so neither side can drift unnoticed.
 
 Usage::
 
-    .venv/bin/python scripts/make_test_vectors.py [--out-dir patches/tests/data]
+    .venv/bin/python scripts/make_test_vectors.py [--out-dir wavelength_table/tests/data]
 """
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ from wavelength_pdf import sampling
 from wavelength_pdf.precision import float64
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_OUT = REPO / "patches" / "tests" / "data"
+DEFAULT_OUT = REPO / "wavelength_table" / "tests" / "data"
 TABLE_NAME = "vectors-table.csv"
 VECTORS_NAME = "vectors.csv"
 VECTORS_HEADER = ("u,lambda0,lambda1,lambda2,lambda3,"
@@ -125,7 +125,7 @@ def write_equal_mass_vectors(out_dir: Path) -> tuple[Path, Path]:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     head = ["# Test vectors of the equal-mass construction (design §1.7), written by",
-            "# scripts/make_test_vectors.py from optimizer/wavelength_pdf/stratified.py (the",
+            "# scripts/make_test_vectors.py from python/wavelength_pdf/stratified.py (the",
             "# reference). Do not edit by hand."]
     inputs = [*head, "# Weights q at nodes x [nm], linear between them; one case per number:"]
     tables = [*head, f"# The tables equal_mass_table(x, q) builds from {EQUAL_MASS_INPUTS_NAME}:",
@@ -160,7 +160,7 @@ def write_vectors(out_dir: Path) -> tuple[Path, ...]:
     mix = np.asarray(sampling.mixture_pdf(grid, pdfs, lam))        # (4, n)
     lines = [
         "# Test vectors of the wavelength sampler, written by scripts/make_test_vectors.py",
-        "# from optimizer/wavelength_pdf/sampling.py (the reference). Do not edit by hand.",
+        "# from python/wavelength_pdf/sampling.py (the reference). Do not edit by hand.",
         f"# Table: {TABLE_NAME}. Columns: u, lambda_k = F_k^-1(u) [nm] (k = 0..3, one u for",
         "# all four), mixture_pdf_j = (1/4) sum_k p_k(lambda_j) [1/nm].",
         VECTORS_HEADER,

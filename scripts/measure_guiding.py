@@ -7,7 +7,7 @@ pairs with its standard error. Equal CPU time comes from the CPU seconds every i
 (``renderCPUSeconds``, which for guiding includes the pre-pass and the tables) through the
 benchmark's ``equal_time_ratio`` (a squared error falls as 1/spp).
 
-    PYTHONPATH=optimizer .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3]
+    .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3]
         [--size 80 60] [--threads 1] [--out docs/guiding/measurement.csv]
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "optimizer"))
+sys.path.insert(0, str(REPO / "python"))
 
 from wavelength_pdf.evaluation.benchmark.measures import _delta_e, equal_time_ratio, lit_pixels  # noqa: E402
 from wavelength_pdf.evaluation.metrics import rgb_to_lab  # noqa: E402

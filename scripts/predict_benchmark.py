@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "optimizer"))
+sys.path.insert(0, str(HERE.parent / "python"))
 
 
 def main(argv=None) -> int:

@@ -40,7 +40,7 @@ stamp=.venv/.installed-$(sha1sum pyproject.toml | cut -c1-12)
 if [ ! -f "$stamp" ]; then
   log "installing the wavelength-pdf package and its dependencies into .venv"
   .venv/bin/python -m pip install -q --upgrade pip
-  .venv/bin/python -m pip install -q -e ".[test,ipopt]"  # ipopt: the suite covers that solver too
+  .venv/bin/python -m pip install -q -e ".[evaluation,test,ipopt]"  # the suite covers the evaluation and Ipopt too
   rm -f .venv/.installed-*; touch "$stamp"
 fi
 

@@ -14,7 +14,7 @@ import pytest
 from repo_paths import PBRT, REPO, SHARED  # noqa: E402,F401  (one place for the paths)
 
 # The tests call the numerical modules (objective, sampling, health) directly, which expect
-# float64; the library's entry points scope it themselves (tests/optimizer/test_package.py
+# float64; the library's entry points scope it themselves (tests/python/wavelength_pdf/test_package.py
 # checks that importing the package leaves this setting alone, in a fresh interpreter).
 jax.config.update("jax_enable_x64", True)
 

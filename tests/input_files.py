@@ -61,7 +61,7 @@ def read_bounded(reader: str, path: str | os.PathLike, seconds: float = 60,
     "ErrorType: message" when it raised, 0 and "read" when it read the file. A reader still
     running after ``seconds`` is killed and reported as status -1."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [str(REPO / "optimizer"), os.environ.get("PYTHONPATH", "")]))
+        [str(REPO / "python"), os.environ.get("PYTHONPATH", "")]))
     try:
         r = subprocess.run([sys.executable, "-c", _READ, reader, str(path)], capture_output=True,
                            text=True, timeout=seconds, env=env, preexec_fn=_limit_memory(memory))

@@ -1,6 +1,6 @@
 """The committed cross-language test vectors equal what the Python reference writes today.
 
-``patches/tests/data/vectors*.csv`` pin the C++ sampler (patches/include/wavelength_table.h,
+``wavelength_table/tests/data/vectors*.csv`` pin the C++ sampler (wavelength_table/include/wavelength_table.h,
 checked by the C++ test) to the Python one (wavelength_pdf.sampling);
 ``equal-mass-*.csv`` pin ``wavelength_table::EqualMassTable`` to
 ``wavelength_pdf.stratified.equal_mass_table`` (design §1.7). Here they are
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-DATA = REPO / "patches" / "tests" / "data"
+DATA = REPO / "wavelength_table" / "tests" / "data"
 
 
 def _load_script():

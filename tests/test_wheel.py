@@ -27,7 +27,7 @@ from wheel_helpers import build_wheel, clean_env, fresh_venv
 
 pytestmark = pytest.mark.slow
 
-STRAY = "optimizer/wavelength_pdf/_untracked_probe.py"
+STRAY = "python/wavelength_pdf/_untracked_probe.py"
 STALE = "build/lib/wavelength_pdf/_stale_probe.py"
 
 
@@ -78,7 +78,7 @@ def test_the_wheel_holds_the_tracked_sources_and_nothing_else(checkout, wheel):
             assert source.relative_to(checkout).as_posix() in tracked, f"{member} is not from a tracked file"
             assert z.read(member) == source.read_bytes(), f"{member} differs from {source}"
     shipped = {_source_of(m, checkout).relative_to(checkout).as_posix() for m in members}
-    modules = {t for t in tracked if t.startswith("optimizer/wavelength_pdf/") and t.endswith(".py")}
+    modules = {t for t in tracked if t.startswith("python/wavelength_pdf/") and t.endswith(".py")}
     assert modules <= shipped, f"tracked modules missing from the wheel: {sorted(modules - shipped)}"
     assert not any("probe" in m for m in members)
     assert wheel.name.endswith("-py3-none-any.whl")
@@ -101,15 +101,15 @@ def test_pip_wheel_in_the_checkout_leaves_build_alone(checkout, tmp_path):
 
 
 def test_the_readme_install_line_names_the_wheel_the_script_builds(wheel):
-    assert f'pip install "dist/{wheel.name}[mitsuba]"' in (REPO / "README.md").read_text()
+    assert f'pip install "dist/{wheel.name}[evaluation,mitsuba]"' in (REPO / "README.md").read_text()
 
 
 def test_no_install_line_asks_an_index_for_the_package():
     """The package is on no index: `pip install wavelength-pdf[...]` fails wherever it is
     written (documents, error messages)."""
     by_name = re.compile(r"pip install\s+['\"]?wavelength[-_]pdf(?=[\[\s'\"]|$)")  # not a wheel's file name
-    files = [REPO / "README.md", REPO / "patches" / "README.md", *(REPO / "docs").rglob("*.md"),
-             *(REPO / "optimizer").rglob("*.py")]
+    files = [REPO / "README.md", REPO / "wavelength_table" / "README.md", *(REPO / "integrations").rglob("README.md"), *(REPO / "docs").rglob("*.md"),
+             *(REPO / "python").rglob("*.py")]
     found = [f"{f.relative_to(REPO)}: {m.group(0)}" for f in files for m in by_name.finditer(f.read_text())]
     assert not found, found
 

@@ -31,7 +31,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from repo_paths import REPO, SHARED  # noqa: E402
 
-sys.path.insert(0, str(REPO / "optimizer"))
+sys.path.insert(0, str(REPO / "python"))
 from wavelength_pdf.evaluation.metrics import rgb_to_xyz  # noqa: E402
 from wavelength_pdf.exr import read_rgb  # noqa: E402
 

@@ -2,7 +2,7 @@
 exit status 1, no output file, and the refusal comes before any rendering.
 
 The scene-level cases (huge films, camera rays that overflow, shapes beyond range, directories
-where files are expected) are unit tests in pbrt-v4/src/pbrt/robustness_test.cpp; these are
+where files are expected) are unit tests in renderer/src/pbrt/robustness_test.cpp; these are
 the cases the command line itself decides.
 """
 from __future__ import annotations

@@ -25,7 +25,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from repo_paths import PBRT, REPO, SHARED  # noqa: E402
 
-sys.path.insert(0, str(REPO / "optimizer"))
+sys.path.insert(0, str(REPO / "python"))
 from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402
 from wavelength_pdf.exr import read_rgb  # noqa: E402
 

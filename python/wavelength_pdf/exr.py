@@ -1,0 +1,87 @@
+"""Reading and writing the renderer's images: linear RGB, 32-bit float OpenEXR.
+
+Uses the OpenEXR Python bindings (PyPI ``OpenEXR``, the ``evaluation`` extra), imported at the
+first image read or written: the optimizer imports this module without them. The renderer
+writes linear values in the film's colour space (design §5), so no transfer function is
+applied or removed here.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from wavelength_pdf import extras
+
+
+def _openexr():
+    return extras.module("OpenEXR", "evaluation")
+
+
+class ImageError(ValueError):
+    """An image that cannot be read as linear RGB."""
+
+
+def read_rgb(path: str | Path) -> np.ndarray:
+    """Read an EXR file as a (height, width, 3) float64 array of linear RGB.
+
+    Raises
+    ------
+    ImageError
+        If the file is missing, not an EXR file, or has no R, G and B channels.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such image file")
+    OpenEXR = _openexr()
+    try:
+        with OpenEXR.File(str(path)) as f:
+            channels = f.channels()
+            if "RGB" in channels:
+                rgb = np.asarray(channels["RGB"].pixels, dtype=np.float64)
+            elif all(c in channels for c in "RGB"):
+                rgb = np.stack([np.asarray(channels[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
+            elif "RGBA" in channels:
+                rgb = np.asarray(channels["RGBA"].pixels, dtype=np.float64)[..., :3]
+            else:
+                raise ImageError(f"{path}: no R, G, B channels (has {sorted(channels)})")
+    except ImageError:
+        raise
+    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
+        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+    return rgb
+
+
+def read_header(path: str | Path) -> dict:
+    """Read the header attributes of an EXR file, by name.
+
+    Values are as the OpenEXR bindings give them: ``chromaticities`` is a tuple of eight
+    floats (x, y of red, green, blue and white), ints and floats are Python numbers, strings
+    are ``str`` and 2-vectors are numpy arrays. The renderer's attributes are listed in
+    renderer/src/pbrt/render.h (``RenderMetadata``).
+
+    Raises
+    ------
+    ImageError
+        If the file is missing or not an EXR file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such image file")
+    OpenEXR = _openexr()
+    try:
+        with OpenEXR.File(str(path), header_only=True) as f:
+            return dict(f.header())
+    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
+        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+
+
+def write_rgb(path: str | Path, rgb: np.ndarray) -> None:
+    """Write a (height, width, 3) array as a 32-bit float RGB EXR file."""
+    rgb = np.ascontiguousarray(np.asarray(rgb, dtype=np.float32))
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise ImageError(f"{path}: expected an (h, w, 3) array, got shape {rgb.shape}")
+    OpenEXR = _openexr()
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"RGB": rgb}) as f:
+        f.write(str(path))
