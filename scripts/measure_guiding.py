@@ -7,16 +7,25 @@ pairs with its standard error. Equal CPU time comes from the CPU seconds every i
 (``renderCPUSeconds``, which for guiding includes the pre-pass and the tables) through the
 benchmark's ``equal_time_ratio`` (a squared error falls as 1/spp).
 
-    .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3]
-        [--size 80 60] [--threads 1] [--out docs/guiding/measurement.csv]
+The samplers: pbrt-v4's visible sampling, whole-scene emission sampling (one table), guided
+with emission tables per mixture, guided with optimized tables per mixture (end to end: the
+pre-pass writes the mixtures' spectra, ``wavelength-pdf batch`` optimizes them, the render reads
+them; the optimizer's seconds are reported apart, since its tables are cached by content and
+serve every later render of the scene), and the floor (emission sampling with
+``--wavelength-repeats 8``: what is left when wavelength noise is all but gone, design §6.7).
+
+    .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3] [--size 80 60]
+        [--threads 1] [--out docs/guiding/measurement.csv] [--pictures docs/guiding]
 """
 from __future__ import annotations
 
 import argparse
 import csv
+import os
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +43,61 @@ SAMPLERS = {
     "visible": ("--wavelength-sampling", "visible"),
     "emission": ("--wavelength-sampling", "emission"),
     "guided": ("--wavelength-guiding",),
+    "guided-optimized": ("--wavelength-guiding",),  # + --wavelength-guiding-tables, below
+    "floor": ("--wavelength-sampling", "emission", "--wavelength-repeats", "8"),
 }
+
+
+def optimized_tables(pbrt: Path, scene: Path, common: list[str], guiding: tuple[str, ...], work: Path,
+                     threads: int, batch_args: list[str]) -> tuple[Path, float]:
+    """The pre-pass's mixture spectra, optimized by ``wavelength-pdf batch``: (folder, seconds)."""
+    spectra, tables = work / "spectra", work / "tables"
+    spectra.mkdir(parents=True, exist_ok=True)
+    r = subprocess.run([str(pbrt), *common, "--wavelength-guiding", *guiding,
+                        "--wavelength-guiding-spectra", str(spectra), str(scene)], capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(r.stderr)
+    start = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "wavelength_pdf", "batch", str(spectra), "-o", str(tables),
+                        "--jobs", str(threads), "--quiet", *batch_args], capture_output=True, text=True,
+                       env={**os.environ, "PYTHONPATH": str(REPO / "python")})
+    if r.returncode not in (0, 1):  # 1: a table not accepted (the render falls back to emission's)
+        sys.exit(r.stderr)
+    return tables, time.perf_counter() - start
+
+
+def pictures(where: Path, name: str, images: dict, index: np.ndarray, mask: np.ndarray) -> None:
+    """The guided image, its table map and the seed-pair error maps of each sampler."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mean = np.mean([im for ims in images.values() for im in ims], axis=0)
+    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "floor") if s in images]
+    maps = {s: _delta_e(rgb_to_lab(images[s][0]), rgb_to_lab(images[s][1])) for s in shown}
+    top = float(np.percentile(np.concatenate([m[mask] for m in maps.values()]), 99))
+    fig, axes = plt.subplots(1, 2 + len(shown), figsize=(3.2 * (2 + len(shown)), 3.0), constrained_layout=True)
+    srgb = np.clip(mean / max(float(np.percentile(mean, 99)), 1e-12), 0, 1) ** (1 / 2.2)
+    axes[0].imshow(srgb)
+    axes[0].set_title(f"{name} (mean of all renders)", fontsize=8)
+    axes[1].imshow(index, cmap="tab20", interpolation="nearest", vmin=0, vmax=19)
+    axes[1].set_title(f"table map: {int(index.max()) + 1} tables", fontsize=8)
+    for ax, s in zip(axes[2:], shown):
+        im = ax.imshow(np.where(mask, maps[s], np.nan), cmap="magma", vmin=0, vmax=top)
+        ax.set_title(f"{s}: ΔE00 of a seed pair, mean {np.mean(maps[s][mask]):.2f}", fontsize=8)
+    fig.colorbar(im, ax=axes[2:].tolist(), shrink=0.8, label="CIEDE2000")
+    for ax in axes:
+        ax.set_axis_off()
+    where.mkdir(parents=True, exist_ok=True)
+    fig.savefig(where / f"{name}.png", dpi=110)
+    plt.close(fig)
+
+
+def table_index(path: Path) -> np.ndarray:
+    import OpenEXR
+
+    with OpenEXR.File(str(path)) as f:
+        return np.asarray(f.channels()["wavelengthTable.index"].pixels)
 
 
 def main() -> int:
@@ -46,28 +109,45 @@ def main() -> int:
     ap.add_argument("--pbrt", type=Path, default=REPO / "build" / "pbrt")
     ap.add_argument("--out", type=Path)
     ap.add_argument("--guiding-args", default="", help="extra flags for the guided renders")
+    ap.add_argument("--batch-args", default="", help="extra flags for wavelength-pdf batch (e.g. "
+                    "'--range 360 830 --grid-step 5'; default: its own range, 380-780 nm)")
+    ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
+    ap.add_argument("--scenes", nargs="+", default=list(SCENES), help="benchmark scenes (default: %(default)s)")
     a = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for name in SCENES:
+        for name in a.scenes:
             scene = edit_scene(REPO / "scenes" / "benchmark" / name / "scene.pbrt", None, tmp / f"{name}.pbrt",
                                resolution=tuple(a.size))
-            images, cpu = {}, {}
+            common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp)]
+            guiding = tuple(a.guiding_args.split())
+            tables, optimizer_s = optimized_tables(a.pbrt, scene, common, guiding, tmp / name, a.threads,
+                                                  a.batch_args.split())
+            print(f"{name}: optimized {len(list(tables.glob('*.csv'))) - 1} mixture tables in "
+                  f"{optimizer_s:.1f} s", file=sys.stderr)
+            images, cpu, prepass, guide_bytes = {}, {}, {}, {}
             for sampler, args in SAMPLERS.items():
-                if sampler == "guided":
-                    args = args + tuple(a.guiding_args.split())
+                if sampler.startswith("guided"):
+                    args = args + guiding
+                if sampler == "guided-optimized":
+                    args = args + ("--wavelength-guiding-tables", str(tables))
                 images[sampler], cpu[sampler] = [], []
                 for seed in range(1, 2 * a.pairs + 1):
                     out = tmp / f"{name}-{sampler}-{seed}.exr"
-                    r = subprocess.run([str(a.pbrt), "--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp),
-                                        "--seed", str(seed), "--outfile", str(out), *args, str(scene)],
+                    r = subprocess.run([str(a.pbrt), *common, "--seed", str(seed), "--outfile", str(out), *args,
+                                        str(scene)],
                                        capture_output=True, text=True)
                     if r.returncode != 0:
                         sys.exit(r.stderr)
                     images[sampler].append(read_rgb(out))
                     cpu[sampler].append(float(read_header(out)["renderCPUSeconds"]))
+                    if sampler.startswith("guided"):
+                        h = read_header(out)
+                        prepass.setdefault(sampler, []).append(float(h["wavelengthGuidingCPUSeconds"]))
+                        guide_bytes[sampler] = int(h["wavelengthGuidingBytes"])
                     if sampler == "guided" and seed == 1:
+                        index = table_index(out)
                         h = read_header(out)
                         print(f"{name}: guided with {h['wavelengthGuidingTables']} tables, "
                               f"{h['wavelengthGuidingKinds']} kinds, pre-pass "
@@ -75,20 +155,33 @@ def main() -> int:
             # The lit pixels of the mean of every image (lamps seen directly left out, as the
             # benchmark does).
             mask = lit_pixels(np.mean([im for ims in images.values() for im in ims], axis=0))
+            if a.pictures:
+                pictures(a.pictures, name, images, index, mask)
             result = {}
             for sampler, ims in images.items():
                 de2 = [float(np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[mask] ** 2) / 2)
                        for i in range(a.pairs)]
                 result[sampler] = (np.mean(de2), np.std(de2, ddof=1) / np.sqrt(a.pairs) if a.pairs > 1 else np.nan,
                                    float(np.mean(cpu[sampler])))
+            e_em, _, t_em = result["emission"]
+            e_vis, _, t_vis = result["visible"]
+            e_gd, _, t_gd = result["guided"]
+            floor = result["floor"][0]
             for sampler, (de2, se, t) in result.items():
-                e_em, _, t_em = result["emission"]
-                e_vis, _, t_vis = result["visible"]
                 rows.append({"scene": name, "sampler": sampler, "spp": a.spp, "size": f"{a.size[0]}x{a.size[1]}",
                              "pairs": a.pairs, "de2": f"{de2:.5g}", "de2_se": f"{se:.2g}", "cpu_s": f"{t:.3f}",
                              "de2_vs_emission_equal_spp": f"{de2 / e_em:.3f}",
                              "de2_vs_emission_equal_time": f"{equal_time_ratio(de2, t, e_em, t_em):.3f}",
-                             "de2_vs_visible_equal_time": f"{equal_time_ratio(de2, t, e_vis, t_vis):.3f}"})
+                             "de2_vs_visible_equal_time": f"{equal_time_ratio(de2, t, e_vis, t_vis):.3f}",
+                             "de2_vs_guided_equal_time": f"{equal_time_ratio(de2, t, e_gd, t_gd):.3f}",
+                             # the share of emission's error above the floor that is left
+                             "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}",
+                             "optimizer_s": f"{optimizer_s:.1f}" if sampler == "guided-optimized" else "",
+                             # the pre-pass and the tables' share of the render's CPU time, and the
+                             # guide's memory (tables + tile map) against the film's 32 bytes a pixel
+                             "prepass_share": f"{np.mean(prepass[sampler]) / t:.4f}" if sampler in prepass else "",
+                             "guide_vs_film_memory": (f"{guide_bytes[sampler] / (32 * a.size[0] * a.size[1]):.4f}"
+                                                      if sampler in guide_bytes else "")})
     w = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]))
     w.writeheader()
     w.writerows(rows)

@@ -17,6 +17,7 @@ wavelengths from the table of the lamps that light it.
 from __future__ import annotations
 
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -178,6 +179,58 @@ def test_outputs_of_a_scene_with_several_lamps(pbrt, tmp_path):
     # The tables differ: guiding is not the whole-scene table K times.
     t0, t1 = read_table(folder / "table-0.csv"), read_table(folder / "table-1.csv")
     assert np.abs(mixture(t0, lam) - mixture(t1, lam)).max() > 0.1 * em.max()
+
+
+def test_optimized_tables_end_to_end(pbrt, tmp_path):
+    """The documented route: the pre-pass writes its mixtures' spectra, `wavelength-pdf batch`
+    optimizes that folder, the render reads the tables by mixture hash; each table keeps the
+    defensive share, and the image still agrees with visible sampling."""
+    scene = small("two-lamps", tmp_path)
+    spp = 512
+    spectra, tables = tmp_path / "spectra", tmp_path / "tables"
+    r = run(pbrt, "--quiet", "--spp", str(spp), *GUIDED, "--wavelength-guiding-spectra", str(spectra), str(scene))
+    assert r.returncode == 0, r.stderr
+    written = sorted(p.name for p in spectra.iterdir())
+    assert "clusters.txt" in written and all(n.startswith("mixture-") and n.endswith(".spd")
+                                             for n in written if n != "clusters.txt"), written
+    # The command the renderer's message advises.
+    batch = subprocess.run([sys.executable, "-m", "wavelength_pdf", "batch", str(spectra), "-o", str(tables),
+                            "--max-evals", "20", "--quiet"],
+                           capture_output=True, text=True, timeout=900)
+    assert batch.returncode in (0, 1), batch.stderr  # 1: some table not accepted (the render says which)
+    assert list(tables.glob("mixture-*.csv")), batch.stderr
+    guided = GUIDED + ("--wavelength-guiding-tables", str(tables))
+    probe = tmp_path / "probe.exr"
+    assert run(pbrt, "--quiet", "--spp", "256", "--seed", "99", "--outfile", str(probe), str(scene)).returncode == 0
+    lit = lit_pixels(read_rgb(probe))
+    for scale in (1, 2, 4):
+        va, vb = (read_rgb(p) for p in render_pair(pbrt, scene, tmp_path, ("--wavelength-sampling", "visible"),
+                                                   spp * scale, "visible"))
+        gpaths = render_pair(pbrt, scene, tmp_path, guided, spp * scale, "optimized")
+        ga, gb = (read_rgb(p) for p in gpaths)
+        vm, vse = mean_and_se(va, vb, lit)
+        gm, gse = mean_and_se(ga, gb, lit)
+        y, y_sigma = float(vm @ LUMINANCE), float(np.hypot(vse @ LUMINANCE, gse @ LUMINANCE))
+        if 4 * y_sigma < DETECT * y:
+            break
+    assert 4 * y_sigma < DETECT * y, f"too noisy to see a {DETECT:.0%} bias ({y_sigma / y:.3%})"
+    z = (gm - vm) / np.sqrt(vse ** 2 + gse ** 2)
+    assert np.all(np.abs(z) < 4), f"optimized guided {gm} vs visible {vm}: z = {z}"
+    # Every table the render used came from the optimized folder (the spectra were written at
+    # the render's own settings, so every mixture hash matches), with the defensive share.
+    folder = gpaths[0].with_suffix(".guiding")
+    rows = [l.split(",") for l in (folder / "clusters.csv").read_text().splitlines() if not l.startswith("#")]
+    source = rows[0].index("source")
+    optimized = {p.name for p in tables.glob("mixture-*.csv")}
+    assert rows[1:] and all(Path(r[source]).name in optimized for r in rows[1:]), rows
+    emission = tmp_path / "emission.csv"
+    assert run(pbrt, "--quiet", "--emission-table", str(emission), str(scene)).returncode == 0
+    lam = np.arange(360.25, 830, 0.5)
+    em = mixture(read_table(emission), lam)
+    emits = em > 1e-6 * em.max()
+    for k in range(len(rows) - 1):  # the default defensive share, 0.05 (with the same slack as above)
+        ratio = mixture(read_table(folder / f"table-{k}.csv"), lam)[emits] / em[emits]
+        assert ratio.min() > 0.05 * 0.98, f"table {k}: mixture only {ratio.min():.3g} of the scene's emission"
 
 
 def test_one_lamp_is_one_table_the_emission_table(pbrt, tmp_path):

@@ -545,7 +545,7 @@ WavelengthGuide BuildWavelengthGuide(const Scene &scene, const GuidingSettings &
                             std::to_string(g.tables.size()) + " tables this render needs is there:" + list +
                             "\n(write the mixtures with --wavelength-guiding-spectra DIR and the same scene, "
                             "--spp, resolution and --guiding-* options, then optimize them: "
-                            "wavelength-pdf batch DIR -o TABLES --range 360 830)");
+                            "wavelength-pdf batch DIR -o TABLES)");
         }
         for (const std::string &m : missing)
             Warning("wavelength guiding: no optimized table " + m + "; that table is the stratified one");
@@ -576,7 +576,7 @@ void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &g, const
         if (ReadFileOrEmpty(p) == text) continue;  // the same mixture: left alone (cache)
         WriteTextAtomically(p, text);
     }
-    WriteTextAtomically(fs::path(dir) / "clusters.csv", ClustersText(g, false));
+    WriteTextAtomically(fs::path(dir) / "clusters.txt", ClustersText(g, false));  // not a spectrum: .txt
 }
 
 std::string GuidingOutputDir(const std::string &imagePath) {

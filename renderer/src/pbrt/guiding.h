@@ -158,7 +158,8 @@ std::string MixtureSpectrumText(const LightKinds &kinds, const std::vector<doubl
 
 // --wavelength-guiding-spectra DIR: writes DIR/mixture-<hash>.spd for every table (a file
 // already there with the same numbers is left alone, so an optimizer's cache keyed by it stays
-// valid) and DIR/clusters.csv; creates DIR when missing. Throws PbrtError on failure.
+// valid) and DIR/clusters.txt (CSV text, named so that `wavelength-pdf batch DIR`, which reads
+// .csv, .spd and .pbrt files, optimizes the spectra alone); creates DIR when missing. Throws PbrtError on failure.
 void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &guide, const std::string &source);
 
 // Beside the image OUT.ext: OUT.guiding/ with table-<k>.csv (each table as sampled, design §2

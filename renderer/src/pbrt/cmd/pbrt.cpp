@@ -103,7 +103,7 @@ Wavelengths (four per path from one random number):
                                mixed with the defensive share
   --wavelength-guiding-spectra DIR
                                render nothing: run the pre-pass and write each table's
-                               mixture spectrum to DIR/mixture-HASH.spd (and clusters.csv);
+                               mixture spectrum to DIR/mixture-HASH.spd (and clusters.txt);
                                give the render's own --spp, resolution and --guiding-*
                                options, so that the render chooses the same mixtures
   --wavelength-repeats K       trace each camera sample K times with the same random
@@ -532,7 +532,7 @@ int main(int argc, char **argv) {
             if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
                 throw PbrtError("--wavelength-guiding-spectra \"" + opts.guidingSpectraDir + "\": not a folder");
             // The folder (made when missing) must be writable, or its parent when it is missing.
-            CheckOutputFilePath(std::filesystem::is_directory(dir, ec) ? (dir / "clusters.csv").string()
+            CheckOutputFilePath(std::filesystem::is_directory(dir, ec) ? (dir / "clusters.txt").string()
                                                                        : dir.string());
             std::unique_ptr<Scene> scene = LoadScene(files, opts);
             if (scene->lights.empty()) (void)SceneEmissionSpectrum(*scene);  // "no emitters"
