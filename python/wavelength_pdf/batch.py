@@ -21,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from wavelength_pdf.coverage import check_range
+from wavelength_pdf.problem import DEFAULT_OBJECTIVE_SPP, objective_label
 from wavelength_pdf.produce import optimize_one
 from wavelength_pdf.result import SUMMARY_FIELDS, Result
 from wavelength_pdf.spectra import SpectrumError, load_spectra
@@ -94,7 +95,8 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
         check_range(sp[0], lo, hi)  # light beyond the table's ends (design §3.3)
         grid = job["grid"] if isinstance(job["grid"], str) else np.asarray(job["grid"])
         o = optimize_one(sp[0], out, grid, job["solver"], job["seed"], job["max_seconds"], None,
-                         max_evals=job.get("max_evals"))
+                         max_evals=job.get("max_evals"), objective=job.get("objective", "J"),
+                         objective_spp=job.get("objective_spp"))
         if o.written:
             return _row(spec, "written", "", o.result, str(out))
         return _row(spec, "not accepted", o.result.reason, o.result)
@@ -156,13 +158,14 @@ def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
 
 def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndarray | str,
               solver: str | None, seed: int, max_seconds: float | None = None,
-              max_evals: int | None = None, jobs: int = 1, force: bool = False,
+              max_evals: int | None = None, objective: str = "J", objective_spp: int | None = None,
+              jobs: int = 1, force: bool = False,
               on_start: Callable[[int], None] | None = None,
               on_row: Callable[[dict], None] | None = None) -> tuple[list[dict], Path]:
     """Optimize every spectrum of ``folder`` into ``outdir``; returns the rows and summary.csv.
 
-    Resumable: a table newer than its input is kept and its header fills its row (status
-    ``kept``), unless ``force``. ``on_start(n)`` is told how many items will be optimized,
+    Resumable: a table newer than its input, for the same objective (design §4.6), is kept
+    and its header fills its row (status ``kept``), unless ``force``. ``on_start(n)`` is told how many items will be optimized,
     ``on_row(row)`` gets each finished row.
     """
     folder, outdir = Path(folder), Path(outdir)
@@ -170,19 +173,22 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
     if not items and not rows:
         raise BatchError(f"{folder}: no spectrum files ({', '.join(SPECTRUM_SUFFIXES)})")
     outdir.mkdir(parents=True, exist_ok=True)
+    wanted = objective_label(objective, DEFAULT_OBJECTIVE_SPP if objective_spp is None else objective_spp)
     todo: list[dict[str, Any]] = []
     for it in items:
         if not force and it.out.is_file() and it.out.stat().st_mtime >= it.source.stat().st_mtime:
             try:
                 kept = Result.from_table(read_table(it.out))
+                if kept.objective != wanted:
+                    raise TableError(f"made for the objective {kept.objective!r}")
                 rows.append(_row(it.spec, "kept", "table newer than input", kept, str(it.out)))
                 continue
             except TableError:
-                pass  # unreadable: redo it
+                pass  # unreadable, or for another objective: redo it
         todo.append({"spec": it.spec, "out": str(it.out), "range": (lo, hi),
                      "grid": grid if isinstance(grid, str) else np.asarray(grid).tolist(),
                      "solver": solver, "seed": seed, "max_seconds": max_seconds,
-                     "max_evals": max_evals})
+                     "max_evals": max_evals, "objective": objective, "objective_spp": objective_spp})
     if on_start is not None:
         on_start(len(todo))
     report = on_row or (lambda row: None)

@@ -42,8 +42,36 @@ def _mean_over_colours(arr: dict, per_colour: Array) -> Array:
     return jnp.sum(arr["weights"] * per_colour) if "weights" in arr else per_colour
 
 
-def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Array):
-    """J, E[C] and E[(C - c)^2] (per channel).
+def stratified_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: Array) -> Array:
+    """The ``stratified`` objective (design §4.6): sqrt(N tr(M Cov)), Cov the covariance of
+    the mean of N samples of C(u), one u in each stratum [i/N, (i+1)/N), and M CIEDE2000's
+    quadratic form in XYZ at the target (``problem.with_objective``); the weighted mean over
+    surface colours of the same.
+
+    Cov = E[C C'] / N - sum_i m_i m_i', m_i the integral of C over stratum i (the
+    within-stratum covariances summed over N^2). E[C C']'s diagonal takes the exact part of
+    the second moment (wavelength space), as J's moments do: the quadrature only sees
+    C^2 - sum_j (f_j / M_j)^2 there.
+    """
+    n = arr["strata"].shape[0] + 1
+    idx = jnp.clip(jnp.floor(u * n).astype(jnp.int32), 0, n - 1)
+
+    def one(C, D, diag_exact, M):
+        m = jax.ops.segment_sum(wt[:, None] * C, idx, num_segments=n)  # (n, 3)
+        second = jnp.einsum("p,pa,pb->ab", wt, C, C)
+        second = second + jnp.diag(diag_exact - jnp.sum(wt[:, None] * D, axis=0))
+        cov = second / n - m.T @ m
+        return jnp.sqrt(jnp.maximum(n * jnp.sum(M * cov), 0.0))
+
+    if C.ndim == 2:
+        return one(C, D, diag_exact, arr["strata_metric"])
+    diag = jnp.broadcast_to(diag_exact, C.shape[:1] + (3,))
+    return _mean_over_colours(arr, jax.vmap(one)(C, D, diag, arr["strata_metric"]))
+
+
+def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Array, u: Array):
+    """J, E[C] and E[(C - c)^2] (per channel); J is the ``stratified`` value instead where
+    the problem stands for it (design §4.6).
 
     E[C^2] = (exact diagonal part, wavelength space) + (cross terms, u-quadrature): the
     quadrature only sees C^2 - sum_j (f_j / M_j)^2, which has no firefly peaks.
@@ -59,13 +87,15 @@ def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Arra
         cross = jnp.sum(wt[:, None] * (C * C - D), axis=-2)
     c = arr["c"]
     m2 = diag_exact + cross - 2.0 * c * m1 + c * c
+    if "strata" in arr:
+        J = stratified_value(arr, u, wt, C, D, diag_exact)
     return J, m1, m2
 
 
 def _table_moments(P: Array, arr: dict, glx: Array, glw: Array):
     u, wt, C, D = table_quadrature(P, arr, glx, glw)
     PN = jax.vmap(lambda p: sampling.normalize(arr["grid"], p))(P)
-    return estimator_moments(arr, wt, C, D, diag_second_moment(arr, jnp.sum(PN, axis=0)))
+    return estimator_moments(arr, wt, C, D, diag_second_moment(arr, jnp.sum(PN, axis=0)), u)
 
 
 def penalized(P: Array, arr: dict, glx: Array, glw: Array, var_ref: Array, mu: Array, margin: Array):

@@ -23,15 +23,15 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from . import grids, health as health_mod, init as init_mod, objective, uniform
+from . import grids, health as health_mod, init as init_mod, objective as objective_mod, uniform
 from .budget import Budget
 from .compile_cache import enable_compilation_cache
 from .model import DEFAULT_GRID, normalize_density
 from .precision import float64
-from .problem import Problem, make_problem
+from .problem import DEFAULT_OBJECTIVE_SPP, Problem, check_objective, make_problem, objective_label, with_objective
 from .quadrature import ORDER_FINE
 from .result import Result
-from .solvers import DEFAULT_SOLVER, SOLVERS, Solver, Start, initialization_result
+from .solvers import DEFAULT_SOLVER, REFINE_EVALUATIONS, SOLVERS, Solver, Start, initialization_result, refine
 from .table import Table
 from .threads import single_threaded_blas
 
@@ -57,24 +57,32 @@ def _evaluations(solver: Solver, solver_options: dict | None) -> tuple[int, dict
 
 
 def evaluation_budget(solver: str = DEFAULT_SOLVER, grid: np.ndarray | str = "auto",
-                      solver_options: dict | None = None) -> int:
+                      solver_options: dict | None = None, objective: str = "J") -> int:
     """Most objective evaluations :func:`optimize_spectrum` spends (for progress bars)."""
-    return _evaluations(_solver(solver), solver_options)[0]
+    n = _evaluations(_solver(solver), solver_options)[0]
+    return n + (0 if objective == "J" else _refine_evaluations(n))
 
 
-def _grid_and_problem(spectrum, grid: np.ndarray | str, reflectances) -> tuple[np.ndarray, Problem]:
-    """The table grid and the problem on it. "auto" chooses the grid on the lamp's problem
-    on the default grid (``grids.auto_grid``), which is already the problem to solve when
-    that grid is kept and J has no surface colours (smooth lamps): it is built once."""
+def _refine_evaluations(search: int) -> int:
+    """The polish's evaluations after a search of ``search`` (design §4.6): at most as many."""
+    return min(REFINE_EVALUATIONS, search)
+
+
+def _grid_and_problem(spectrum, grid: np.ndarray | str, reflectances, objective: str = "J",
+                      objective_spp: int = 1) -> tuple[np.ndarray, Problem]:
+    """The table grid and the problem on it, standing for ``objective`` (design §4.6).
+    "auto" chooses the grid on the lamp's problem on the default grid (``grids.auto_grid``),
+    which is already the problem to solve when that grid is kept and J has no surface
+    colours (smooth lamps): it is built once."""
     if isinstance(grid, str):
         if grid != "auto":
             raise ValueError(f"grid must be an array of wavelengths or 'auto', not {grid!r}")
         lamp = make_problem(spectrum, DEFAULT_GRID)
         grid = grids.auto_grid(lamp, DEFAULT_GRID)
         if reflectances is None and np.array_equal(grid, DEFAULT_GRID):
-            return grid, lamp
+            return grid, with_objective(lamp, objective, objective_spp)
     grid = np.asarray(grid, dtype=np.float64)
-    return grid, make_problem(spectrum, grid, reflectances)
+    return grid, with_objective(make_problem(spectrum, grid, reflectances), objective, objective_spp)
 
 
 @float64
@@ -88,6 +96,8 @@ def optimize_spectrum(
     max_seconds: float | None = None,
     solver_options: dict | None = None,
     reflectances: ReflectanceSet | None = None,
+    objective: str = "J",
+    objective_spp: int = DEFAULT_OBJECTIVE_SPP,
 ) -> Result:
     """Find four wavelength densities on ``grid`` that minimize J for ``spectrum``.
 
@@ -125,13 +135,19 @@ def optimize_spectrum(
     reflectances : wavelength_pdf.reflectances.ReflectanceSet, optional
         Surface colours (design §4.5): J is the weighted mean of every colour's J, and the
         health rules hold for every colour. The grid ("auto") is still chosen for the lamp.
+    objective, objective_spp : str, int
+        What to minimize (design §4.6): ``"J"`` (§4.1, the default) or ``"stratified"``,
+        the linearised CIEDE2000 of a pixel of ``objective_spp`` stratified samples. Every
+        J of the result (of the table, the start and stratified uniform sampling, and the
+        rule that accepts it) is then that objective's value.
 
     Raises
     ------
     ValueError
-        Unknown solver (or one whose optional package is missing), bad grid, or a spectrum
-        without power in the grid range.
+        Unknown solver (or one whose optional package is missing), bad grid, unknown
+        objective or spp, or a spectrum without power in the grid range.
     """
+    check_objective(objective, objective_spp)
     run_solver = _solver(solver)
     run_solver.check_available()
     t0 = time.monotonic()
@@ -158,13 +174,21 @@ def optimize_spectrum(
     else:
         with single_threaded_blas():
             run = run_solver(start, budget, seed=seed, progress=progress, **options)
+    if objective != "J":
+        # J's search finds the basin, a polish by the chosen objective its bottom
+        # (``solvers.refine``); every figure of the result is that objective's.
+        problem = with_objective(problem, objective, objective_spp)
+        start = Start.of(problem, P0)
+        with single_threaded_blas():
+            run = refine(start, run, budget.with_evaluations(_refine_evaluations(max_evaluations)),
+                         progress=progress)
     result = Result.judge(
-        Table(grid=grid.copy(), pdfs=run.P), J=run.J, J_fine=objective.J(problem, run.P, ORDER_FINE),
+        Table(grid=grid.copy(), pdfs=run.P), J=run.J, J_fine=objective_mod.J(problem, run.P, ORDER_FINE),
         J_uniform=start.J_uniform, J_init=start.J,
         health=run.health if run.health is not None else health_mod.health(problem, run.P),
         health_init=start.health, name=getattr(spectrum, "name", ""),
         source=_source(spectrum, reflectances), solver=solver, seed=seed, history=list(run.history),
-        message=run.message)
+        message=run.message, objective=objective_label(objective, objective_spp))
     result.seconds = time.monotonic() - t0
     return result
 
@@ -191,22 +215,24 @@ def _source(spectrum, reflectances) -> str:
 
 
 @float64
-def evaluate_table(spectrum: Spectrum, table: Table, reflectances: ReflectanceSet | None = None) -> Result:
+def evaluate_table(spectrum: Spectrum, table: Table, reflectances: ReflectanceSet | None = None,
+                   objective: str = "J", objective_spp: int = DEFAULT_OBJECTIVE_SPP) -> Result:
     """Score any table (e.g. a reference table) for ``spectrum`` with the project's
     evaluator: the same record as :func:`optimize_spectrum`, judged by the same rule
     against the equal-mass initialization on the table's grid (``solver`` is ''); with
-    ``reflectances``, over those surface colours (design §4.5)."""
+    ``reflectances``, over those surface colours (design §4.5); by ``objective`` (§4.6)."""
+    check_objective(objective, objective_spp)
     t0 = time.monotonic()
     enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
-    problem = make_problem(spectrum, grid, reflectances)
+    problem = with_objective(make_problem(spectrum, grid, reflectances), objective, objective_spp)
     P = normalize_density(grid, table.pdfs)
     P0 = init_mod.equal_mass_partition(problem)
-    J, J_fine = objective.J_pair(problem, P)
+    J, J_fine = objective_mod.J_pair(problem, P)
     result = Result.judge(
         Table(grid=grid.copy(), pdfs=P), J=J, J_fine=J_fine, J_uniform=uniform.uniform_J(problem),
-        J_init=objective.J(problem, P0), health=health_mod.health(problem, P),
+        J_init=objective_mod.J(problem, P0), health=health_mod.health(problem, P),
         health_init=health_mod.health(problem, P0), name=getattr(spectrum, "name", ""),
-        source=_source(spectrum, reflectances))
+        source=_source(spectrum, reflectances), objective=objective_label(objective, objective_spp))
     result.seconds = time.monotonic() - t0
     return result

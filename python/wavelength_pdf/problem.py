@@ -11,9 +11,10 @@ jitted functions compile once per size class rather than once per spectrum.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from . import aot, colorimetry
@@ -73,6 +74,10 @@ class Problem:
         ``spec`` per colour, (K, Nf): I * R_k at the nodes.
     reflectance_set : str
         The set's name ('' without reflectances).
+    objective, spp : str, int
+        The objective the value "J" of every evaluation stands for (design §4.6): ``"J"``
+        (§4.1) or ``"stratified"`` for a pixel of ``spp`` stratified samples; set by
+        :func:`with_objective`, which adds the arrays it reads.
     """
 
     name: str
@@ -89,6 +94,8 @@ class Problem:
     weights: np.ndarray | None = None
     refl: np.ndarray | None = None
     reflectance_set: str = ""
+    objective: str = "J"
+    spp: int = 1
 
     @property
     def batched(self) -> bool:
@@ -317,10 +324,90 @@ def simplify(problem: Problem, rel_tol: float) -> Problem:
     tol = rel_tol * np.maximum(np.max(Y, axis=0), 1e-300)
     keep = _polyline_keep(x, Y, tol) | np.isin(x, problem.grid)
     if not problem.batched:
-        return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4])
-    return _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4],
-                       refl=Y[keep, 4:].T, weights=problem.weights,
-                       reflectance_set=problem.reflectance_set)
+        simpler = _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4])
+    else:
+        simpler = _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4],
+                              refl=Y[keep, 4:].T, weights=problem.weights,
+                              reflectance_set=problem.reflectance_set)
+    return with_objective(simpler, problem.objective, problem.spp)
+
+
+#: The objectives a problem can stand for (design §4.6).
+OBJECTIVES = ("J", "stratified")
+#: The pixel's sample count ``stratified`` models unless told (the benchmark's middle spp).
+DEFAULT_OBJECTIVE_SPP = 64
+#: Most strata ``stratified`` models (each adds a breakpoint to every evaluation).
+MAX_OBJECTIVE_SPP = 4096
+#: Step of the finite differences that take CIEDE2000's local quadratic form (Lab is ~100:
+#: small against any colour difference, large against rounding).
+_METRIC_STEP = 1e-3
+
+
+def de2000_metric(lab_c: np.ndarray) -> np.ndarray:
+    """G (3, 3) with CIEDE2000(lab_c + e, lab_c)^2 ~ e' G e for small e: the local quadratic
+    form, by central differences of the squared difference (symmetric in +-e, as CIEDE2000's
+    mean chroma makes it slightly odd). Not by automatic differentiation: CIEDE2000 has a
+    square root with a cone point at e = 0."""
+    lab_c = jnp.asarray(lab_c, dtype=jnp.float64)
+    h = _METRIC_STEP
+    eye = np.eye(3)
+
+    def q(e):
+        return float(colorimetry.delta_e_2000(lab_c + jnp.asarray(e), lab_c)) ** 2
+
+    def even(e):  # the even part: the quadratic form's value along e
+        return 0.5 * (q(e) + q(-e))
+
+    G = np.empty((3, 3))
+    for i in range(3):
+        G[i, i] = even(h * eye[i]) / h ** 2
+    for i in range(3):
+        for j in range(i + 1, 3):
+            G[i, j] = G[j, i] = (even(h * (eye[i] + eye[j])) - even(h * eye[i]) - even(h * eye[j])) / (2 * h * h)
+    return G
+
+
+def _xyz_metric(c: np.ndarray, lab_c: np.ndarray) -> np.ndarray:
+    """Jl' G Jl: CIEDE2000's local quadratic form in XYZ at the target c (Jl = d Lab / d XYZ)."""
+    Jl = np.asarray(jax.jacfwd(colorimetry.xyz_to_lab)(jnp.asarray(c, dtype=jnp.float64)))
+    return Jl.T @ de2000_metric(lab_c) @ Jl
+
+
+def check_objective(objective: str, spp: int) -> None:
+    """Raise ValueError unless ``objective`` is one of :data:`OBJECTIVES` and ``spp`` a whole
+    number in 1..:data:`MAX_OBJECTIVE_SPP` (checked before any long work)."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"unknown objective {objective!r}; one of: {', '.join(OBJECTIVES)}")
+    if isinstance(spp, bool) or not (isinstance(spp, (int, np.integer)) and 1 <= spp <= MAX_OBJECTIVE_SPP):
+        raise ValueError(f"the objective's spp must be a whole number in 1..{MAX_OBJECTIVE_SPP}, not {spp!r}")
+
+
+def objective_label(objective: str, spp: int) -> str:
+    """How a record names the objective: ``J`` or ``stratified, spp 64``."""
+    return objective if objective == "J" else f"{objective}, spp {spp}"
+
+
+def with_objective(problem: Problem, objective: str = "J", spp: int = DEFAULT_OBJECTIVE_SPP) -> Problem:
+    """The same problem standing for ``objective`` (design §4.6).
+
+    ``"J"``: §4.1, the problem as built. ``"stratified"``: the linearised root-mean-square
+    CIEDE2000 of a pixel that averages ``spp`` samples of C(u), one u in each of ``spp``
+    equal strata, times sqrt(spp) (one path's units, like J). Its arrays gain the strata's
+    edges (breakpoints of the u-quadrature) and CIEDE2000's quadratic form in XYZ at each
+    target colour; ``spp=1`` is a pixel of independent samples at any spp.
+    """
+    check_objective(objective, spp)
+    arrays = {k: v for k, v in problem.arrays.items() if k not in ("strata", "strata_metric")}
+    if objective == "J":
+        return replace(problem, arrays=arrays, objective="J", spp=1)
+    spp = int(spp)
+    c = np.atleast_2d(problem.c)
+    lab = np.atleast_2d(problem.lab_c)
+    metric = np.stack([_xyz_metric(ck, lk) for ck, lk in zip(c, lab)])
+    extra = {"strata": np.arange(1, spp, dtype=np.float64) / spp,
+             "strata_metric": metric if problem.batched else metric[0]}
+    arrays.update(jax.device_put(extra))
+    return replace(problem, arrays=arrays, objective=objective, spp=spp)
 
 
 # One compiled function, not a dozen one-operation ones (eager jnp on a NumPy array).

@@ -122,7 +122,8 @@ class Outcome:
 def optimize_one(spectrum: Spectrum, path: Path, grid: np.ndarray | str, solver: str | None,
                  seed: int, max_seconds: float | None, progress: Callable | None,
                  colour_bar: Path | None = None, plot: Path | None = None,
-                 max_evals: int | None = None, reflectances=None) -> Outcome:
+                 max_evals: int | None = None, reflectances=None, objective: str = "J",
+                 objective_spp: int | None = None) -> Outcome:
     """Optimize one spectrum; write its table (only if accepted) and the optional images.
 
     Every output path is checked first (:func:`check_output_path`), before the optimization.
@@ -141,6 +142,10 @@ def optimize_one(spectrum: Spectrum, path: Path, grid: np.ndarray | str, solver:
         kwargs["solver_options"] = {"max_evals": int(max_evals)}
     if reflectances is not None:
         kwargs["reflectances"] = reflectances
+    if objective != "J":
+        kwargs["objective"] = objective
+        if objective_spp is not None:
+            kwargs["objective_spp"] = objective_spp
     result = optimize_spectrum(spectrum, **kwargs)
     table = result.to_table()
     if result.accepted:

@@ -126,14 +126,19 @@ def table_quadrature(P: Array, arr: dict, glx: Array, glw: Array):
     PN, FF = normalized(grid, P)
     Fb = _cdf_at_breakpoints(arr, PN, FF)  # (4, Nb)
     nb = Fb.shape[1]
-    flat = Fb.ravel()
+    # The strata's edges of the ``stratified`` objective (design §4.6) join as breakpoints
+    # of no density (label nd): every piece then lies in one stratum.
+    flat = jnp.concatenate([Fb.ravel(), arr["strata"]]) if "strata" in arr else Fb.ravel()
     order = jnp.argsort(flat, stable=True)
     b = flat[order]
     lab_j = order // nb
     lab_n = arr["bp_idx"][order % nb]
     own = lab_j[None, :] == jnp.arange(nd)[:, None]
     cur = jax.lax.cummax(jnp.where(own, lab_n[None, :], -1), axis=1)[:, :-1]
-    cur = jnp.maximum(cur, 0)  # (4, K-1): node interval of lambda_j on every piece
+    # (4, K-1): node interval of lambda_j on every piece. A density whose CDF reaches 1 at
+    # its last node before the others do (a zero tail) would name that node on the pieces
+    # after it (of width ~0): they lie in the last interval.
+    cur = jnp.clip(cur, 0, x.shape[0] - 2)
     width = b[1:] - b[:-1]
     u = b[:-1, None] + width[:, None] * glx[None, :]  # (K-1, g)
     wt = (width[:, None] * glw[None, :]).ravel()

@@ -84,6 +84,8 @@ class Result:
         Wall time of the call.
     history : list of float
         Best J after every objective evaluation (not written to the header).
+    objective : str
+        What J stands for (design §4.6): ``J`` or e.g. ``stratified, spp 64``.
     health, health_init : Health or None
         The full health reports, when computed in this process (not in the header).
     """
@@ -104,6 +106,7 @@ class Result:
     seed: int | None = None
     seconds: float = 0.0
     history: list[float] = field(default_factory=list)
+    objective: str = "J"
     health: Any = None
     health_init: Any = None
 
@@ -135,10 +138,11 @@ class Result:
         return [
             f"wavelength-pdf {__version__}: four piecewise-linear wavelength densities, "
             "balance heuristic (design §1, §2)",
-            "J = mean over u of CIEDE2000(C(u), c) (design §4); J_fine: finer u quadrature; "
+            "J = mean over u of CIEDE2000(C(u), c) (design §4), or the objective named (§4.6); J_fine: finer u quadrature; "
             "J_uniform: stratified uniform sampling; J_init: equal-mass initialization",
             f"name: {self.name}",
             f"source: {self.source}",
+            f"objective: {self.objective}",
             f"J_uniform: {_num(self.J_uniform)}",
             f"J_init: {_num(self.J_init)}",
             f"J: {_num(self.J)}",
@@ -175,7 +179,7 @@ class Result:
                    reason=reason, name=h.get("name", ""), source=h.get("source", ""),
                    solver=h.get("solver", ""), message=h.get("message", ""),
                    seed=int(seed) if seed.lstrip("-").isdigit() else None,
-                   seconds=_float(h.get("seconds")))
+                   seconds=_float(h.get("seconds")), objective=h.get("objective", "J"))
 
     # --- batch's summary ----------------------------------------------------------------
 

@@ -23,7 +23,9 @@ Array = jax.Array
 def _uniform_breaks(arr: dict, lo: Array, hi: Array) -> Array:
     x = (arr["bp"] - lo) / (hi - lo)
     j = jnp.arange(sampling.N_DENSITIES)[:, None] / sampling.N_DENSITIES
-    return jnp.mod(x[None, :] - j, 1.0)
+    breaks = jnp.mod(x[None, :] - j, 1.0).ravel()
+    # The strata's edges of the ``stratified`` objective (design §4.6), as for a table.
+    return jnp.concatenate([breaks, arr["strata"]]) if "strata" in arr else breaks
 
 
 def _uniform_terms(arr: dict, u: Array) -> Array:
@@ -47,7 +49,7 @@ def _uniform_moments(arr: dict, glx: Array, glw: Array):
     terms = _uniform_terms(arr, u)
     msum = jnp.sum(sampling.stratified_uniform_table(grid), axis=0)
     return estimator_moments(arr, wt, jnp.sum(terms, axis=-3), jnp.sum(terms * terms, axis=-3),
-                    diag_second_moment(arr, msum))
+                             diag_second_moment(arr, msum), u)
 
 
 _uniform_moments_jit = aot.DiskJit(jax.jit(_uniform_moments), "uniform_moments")

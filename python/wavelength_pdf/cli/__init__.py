@@ -130,8 +130,30 @@ def solver_args(parser: argparse.ArgumentParser, names: list[str]) -> None:
                              "solver's own); same input, seed and budget give the same table; a "
                              "multistage result above 0.05 x uniform J gets a second search of "
                              "1.5 N with more starts kept")
+    parser.add_argument("--objective", default="J", metavar="NAME",
+                        help="what to minimize (design §4.6): 'J', the mean CIEDE2000 of one "
+                             "path's colour on a white surface (§4.1), or 'stratified', the "
+                             "linearised CIEDE2000 of a pixel's mean of --objective-spp "
+                             "stratified samples (default: J)")
+    parser.add_argument("--objective-spp", type=positive_int, default=None, metavar="N",
+                        help="with --objective stratified: the samples per pixel it models, "
+                             "1..4096 (default: 64)")
     parser.add_argument("--quiet", "-q", action="store_true",
                         help="no progress bar (the one-line summary is still printed)")
+
+
+def objective_args(args: argparse.Namespace) -> tuple[str, int]:
+    """``--objective`` and ``--objective-spp`` checked (before any long work): (name, spp)."""
+    from wavelength_pdf.problem import DEFAULT_OBJECTIVE_SPP, check_objective
+
+    spp = DEFAULT_OBJECTIVE_SPP if args.objective_spp is None else args.objective_spp
+    if args.objective_spp is not None and args.objective != "stratified":
+        raise BadInput(f"--objective-spp is only used with --objective stratified, not {args.objective!r}")
+    try:
+        check_objective(args.objective, spp)
+    except ValueError as e:
+        raise BadInput(f"--objective: {e}") from None
+    return args.objective, spp
 
 
 def positive_seconds(text: str) -> float:

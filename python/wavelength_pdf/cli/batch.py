@@ -6,7 +6,7 @@ import sys
 from typing import Any
 
 from wavelength_pdf.cli import (positive_int, EXIT_BAD_INPUT, EXIT_NOT_ACCEPTED, PROG, BadInput, Formatter,
-                                check_solver, range_args, solver_args)
+                                check_solver, objective_args, range_args, solver_args)
 from wavelength_pdf.produce import make_grid
 
 
@@ -16,6 +16,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
     lo, hi = args.range
     grid = make_grid(lo, hi, args.grid_step)
     check_solver(args.solver)
+    objective, objective_spp = objective_args(args)
     state: dict[str, Any] = {"bar": None}
 
     def start(n: int) -> None:
@@ -32,6 +33,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
         rows, summary = run_batch(args.folder, args.output, lo=lo, hi=hi, grid=grid,
                                   solver=args.solver, seed=args.seed,
                                   max_seconds=args.max_seconds, max_evals=args.max_evals,
+                                  objective=objective, objective_spp=objective_spp,
                                   jobs=max(1, args.jobs or 1), force=args.force,
                                   on_start=start, on_row=row)
     except BatchError as e:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Sequence
 
 from wavelength_pdf.cli import (EXIT_NOT_ACCEPTED, PROG, SPECTRUM_HELP, BadInput, Formatter,
-                                check_solver, range_args, solver_args)
+                                check_solver, objective_args, range_args, solver_args)
 from wavelength_pdf import extras
 from wavelength_pdf.coverage import check_range
 from wavelength_pdf.produce import make_grid, optimize_one, safe_name, summary_line
@@ -54,12 +54,12 @@ def _suffix_path(path: str | None, spectrum: Spectrum, several: bool) -> Path | 
     return p.with_name(f"{p.stem}-{safe_name(spectrum.name)}{p.suffix}")
 
 
-def budget(solver: str | None, grid, max_evals: int | None) -> int:
+def budget(solver: str | None, grid, max_evals: int | None, objective: str = "J") -> int:
     """The evaluation budget the progress bar counts against."""
     from wavelength_pdf.optimize import DEFAULT_SOLVER, evaluation_budget
 
     return evaluation_budget(solver or DEFAULT_SOLVER, grid,
-                             {"max_evals": max_evals} if max_evals else None)
+                             {"max_evals": max_evals} if max_evals else None, objective)
 
 
 def whole_scene(spec: str, lo: float, hi: float, pbrt: str | None) -> Spectrum:
@@ -111,6 +111,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     lo, hi = args.range
     grid = make_grid(lo, hi, args.grid_step)
     check_solver(args.solver)
+    objective, objective_spp = objective_args(args)
     if args.plot or args.colour_bar:
         extras.require("plots", "--plot and --colour-bar")
     with warnings.catch_warnings(record=True) as caught:
@@ -132,7 +133,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     reflectances = surface_colours(args.reflectances, args.spectrum, lo, hi, args.pbrt)
     paths = output_paths(spectra, args.output)
     several = len(spectra) > 1
-    total = budget(args.solver, grid, args.max_evals)
+    total = budget(args.solver, grid, args.max_evals, objective)
     status = 0
     for sp, path in zip(spectra, paths):
         bar = OptimizationProgress(sp.name, total, enabled=not args.quiet)
@@ -140,7 +141,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
             out = optimize_one(sp, path, grid, args.solver, args.seed, args.max_seconds, bar,
                                _suffix_path(args.colour_bar, sp, several),
                                _suffix_path(args.plot, sp, several), max_evals=args.max_evals,
-                               reflectances=reflectances)
+                               reflectances=reflectances, objective=objective,
+                               objective_spp=objective_spp)
         finally:
             bar.close()
         print(summary_line(out.result, path if out.written else None))

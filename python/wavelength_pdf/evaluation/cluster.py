@@ -97,15 +97,16 @@ def render_task(job: RenderJob, nthreads: int | None, slots: dict[str, int], *af
     return job.run(_threads_here(nthreads, slots))
 
 
-def table_task(spectrum: Spectrum, path: Path, lo: float, hi: float, reflectances=None) -> Path:
+def table_task(spectrum: Spectrum, path: Path, lo: float, hi: float, reflectances=None,
+               objective: str = "J") -> Path:
     """Optimize a job's table unless it is there, under a temporary name renamed into place
     (a task retried after its worker died never finds half a table)."""
     path = Path(path)
     if path.is_file():
-        return ensure_table(spectrum, path, lo, hi, reflectances=reflectances)
+        return ensure_table(spectrum, path, lo, hi, reflectances=reflectances, objective=objective)
     tmp = rendering.temporary(path)
     try:
-        ensure_table(spectrum, tmp, lo, hi, reflectances=reflectances)
+        ensure_table(spectrum, tmp, lo, hi, reflectances=reflectances, objective=objective)
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)

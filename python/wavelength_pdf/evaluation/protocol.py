@@ -99,17 +99,18 @@ class Evaluation:
 
 
 def ensure_table(spectrum: Spectrum, path: Path, lo: float, hi: float, step: float | str = "auto",
-                 progress: Callable[[int, float], None] | None = None, reflectances=None) -> Path:
+                 progress: Callable[[int, float], None] | None = None, reflectances=None,
+                 objective: str = "J") -> Path:
     """The spectrum's optimized table at ``path``, optimized only when it is not there yet
     (with ``reflectances``, a :class:`~wavelength_pdf.reflectances.ReflectanceSet`, for those
-    surface colours)."""
+    surface colours; for ``objective``, design §4.6, at its default spp)."""
     if path.is_file():
         read_table(path)  # a damaged cache is an error, not silently reused
         return path
     from wavelength_pdf.produce import make_grid, optimize_one
 
     outcome = optimize_one(spectrum, path, make_grid(lo, hi, step), None, 0, None, progress,
-                           reflectances=reflectances)
+                           reflectances=reflectances, objective=objective)
     if not outcome.written:
         raise RuntimeError(f"{spectrum.source}: the optimized table was not accepted "
                            f"({outcome.result.reason})")

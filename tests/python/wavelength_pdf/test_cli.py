@@ -108,6 +108,12 @@ def test_help_lists_the_solver_registry(capsys):
         (["optimize", "{tmp}/dir.spd", "-o", "{tmp}/t.csv"], "dir.spd: is a directory"),
         (["optimize", "{tmp}/dir.pbrt", "-o", "{tmp}/t.csv"], "dir.pbrt is a directory"),
         (["optimize", "{tmp}/inc.pbrt", "-o", "{tmp}/t.csv"], "inc.pbrt:2: "),
+        # Objectives (design §4.6): checked before any work.
+        (["optimize", "cie:A", "-o", "{tmp}/t.csv", "--objective", "pixel"], "unknown objective 'pixel'"),
+        (["optimize", "cie:A", "-o", "{tmp}/t.csv", "--objective-spp", "16"], "only used with --objective stratified"),
+        (["optimize", "cie:A", "-o", "{tmp}/t.csv", "--objective", "stratified", "--objective-spp", "5000"],
+         "1..4096"),
+        (["batch", "{tmp}", "-o", "{tmp}/out", "--objective", "j"], "unknown objective 'j'"),
     ],
 )
 def test_bad_input_exits_2_with_message(tmp_path, capsys, argv, message):
@@ -324,6 +330,26 @@ def test_show_prints_grid_normalization_and_J(tmp_path, capsys):
 
 
 # --- end to end with the real optimizer ----------------------------------------------
+
+def test_optimize_for_a_pixel_end_to_end(tmp_path):
+    """--objective stratified: the header names it and states the objective's value of the
+    table written, no worse than J's own table by that objective."""
+    from wavelength_pdf import objective
+    from wavelength_pdf.problem import make_problem, with_objective
+    from wavelength_pdf.spectra import load_spectrum
+
+    out, plain = tmp_path / "t.csv", tmp_path / "j.csv"
+    base = ["--grid-step", "20", "--max-evals", "60", "--quiet"]
+    assert cli.main(["optimize", "cie:FL2", "-o", str(plain), *base]) == 0
+    assert cli.main(["optimize", "cie:FL2", "-o", str(out), "--objective", "stratified",
+                     "--objective-spp", "16", *base]) == 0
+    t, hdr = read_table(out), read_header(read_table(out))
+    assert hdr["objective"] == "stratified, spp 16" and read_header(read_table(plain))["objective"] == "J"
+    problem = with_objective(make_problem(load_spectrum("cie:FL2"), t.grid), "stratified", 16)
+    assert objective.J(problem, t.pdfs) == pytest.approx(float(hdr["J"]), rel=1e-9)
+    assert float(hdr["J"]) <= objective.J(problem, read_table(plain).pdfs) * (1 + 1e-9)
+    assert float(hdr["J"]) < float(hdr["J_uniform"])
+
 
 def test_optimize_end_to_end(tmp_path):
     """The real optimizer on a small problem (60 evaluations): a valid table, no worse than

@@ -132,9 +132,12 @@ LAMPS: dict[str, LampSpec] = {l.key: l for l in [
     LampSpec("lamp-LPS", "lamp:LPS", "sodium", True), LampSpec("lamp-Mercury", "lamp:Mercury", "mercury", True),
 ]}
 
+#: The table optimized for a pixel of 64 stratified samples (``optimize --objective
+#: stratified``, design §4.6) rather than one path (J): one per lamp, for every spp.
+PIXEL = "optimized-pixel"
 #: Every simple sampler is a table of design §1.7; with the optimizer's start and the optimized
 #: (and reference) tables, the rows every job compares.
-TABLE_ROWS = ("uniform", "visible", "spd", "luminance", "xyz", "start", "optimized")
+TABLE_ROWS = ("uniform", "visible", "spd", "luminance", "xyz", "start", "optimized", PIXEL)
 #: The table optimized for the scene's own material colours (``optimize --reflectances scene``,
 #: design §4.5), on the scene sweep's low-discrepancy jobs under spiky lamps.
 SCENE_COLOURS = "optimized-scene"

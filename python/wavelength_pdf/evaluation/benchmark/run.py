@@ -40,6 +40,8 @@ LO, HI = 380.0, 780.0
 #: Bumped when the scores of the same images change (a new measure or a fixed one), so that
 #: cached ``scores.json`` files are computed again.
 SCORES_VERSION = "1"
+#: The rows whose tables the optimizer makes for a lamp (tasks on the cluster), by objective.
+OPTIMIZED = {"optimized": "J", G.PIXEL: "stratified"}
 #: Samplers of the reference's four chunks.
 TRUTH_ROWS = (G.BUILTIN, "uniform", "spd", "luminance")
 
@@ -124,8 +126,8 @@ def baseline_tables(spectrum: Spectrum, folder: Path, rows: Sequence[str], job: 
     }
     needed = set(rows) | {G.FLOOR_TABLE} | (set(TRUTH_ROWS) - {G.BUILTIN})
     for row in sorted(needed):
-        if row == "optimized":
-            paths[row] = folder / "optimized.csv"
+        if row in OPTIMIZED:
+            paths[row] = folder / f"{row}.csv"
             continue
         if row in ("reference", G.SCENE_COLOURS):
             continue
@@ -180,10 +182,10 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
 # --- Running ---------------------------------------------------------------------------
 
 
-def _table_task(spectrum: Spectrum, path: Path, reflectances=None) -> Path:
+def _table_task(spectrum: Spectrum, path: Path, reflectances=None, objective: str = "J") -> Path:
     from wavelength_pdf.evaluation.cluster import table_task
 
-    return table_task(spectrum, path, LO, HI, reflectances)
+    return table_task(spectrum, path, LO, HI, reflectances, objective)
 
 
 def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str | None = None,
@@ -198,8 +200,9 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
     todo = [(p, r) for p in plans for r in p.renders() if r.done() is None or not _table_ready(r)]
-    optimize = {p.tables[row]: (p.spectrum, p.reflectances if row == G.SCENE_COLOURS else None)
-                for p in plans for row in ("optimized", G.SCENE_COLOURS)
+    optimize = {p.tables[row]: (p.spectrum, p.reflectances if row == G.SCENE_COLOURS else None,
+                                OPTIMIZED.get(row, "J"))
+                for p in plans for row in (*OPTIMIZED, G.SCENE_COLOURS)
                 if row in p.tables and not p.tables[row].is_file()}
     if not todo and not optimize:
         say("benchmark: every render is done (cached)")
@@ -212,7 +215,8 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
             f"({len(plans)} jobs); estimated CPU time {cost / 3600:.2f} h, about "
             f"{cost / 3600 / max(threads, 1):.2f} h wall on {threads} render threads"
             + (f"; {len(optimize)} table(s) to optimize first (not in the estimate)" if optimize else ""))
-        made = {path: client.submit(_table_task, sp, path, refl, pure=False) for path, (sp, refl) in optimize.items()}
+        made = {path: client.submit(_table_task, sp, path, refl, obj, pure=False)
+                for path, (sp, refl, obj) in optimize.items()}
         if made:
             # The tables first, all of them: renders that waited on a table's future sat behind
             # hundreds of others on a busy cluster (seen: seven tables never started in an hour).
