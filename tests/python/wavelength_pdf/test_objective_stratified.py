@@ -163,3 +163,21 @@ def test_the_record_names_its_objective_and_reads_it_back():
     assert r.J_init == pytest.approx(objective.J(prob, init.equal_mass_partition(prob)), rel=1e-12)
     assert r.J_uniform == pytest.approx(uniform.uniform_J(prob), rel=1e-12)
     assert r.J_uniform != pytest.approx(plain.J_uniform, rel=1e-3)
+
+
+def test_with_surface_colours_it_is_the_weighted_mean_over_colours():
+    """Design §4.5 and §4.6: each colour's value at its own target, weighted; here against
+    the colours' C(u) tabulated by the estimator (not the quadrature) on a fine grid of u."""
+    from wavelength_pdf import predict
+    from wavelength_pdf.reflectances import ReflectanceSet
+
+    wl = np.array([380.0, 500.0, 600.0, 780.0])
+    refl = ReflectanceSet(name="two", source="test", wavelengths=wl,
+                          values=np.array([[0.2, 0.3, 0.7, 0.8], [0.9, 0.6, 0.2, 0.1]]),
+                          labels=("red", "blue"), weights=np.array([0.25, 0.75]))
+    P = random_table(8)
+    table = Table(grid=GRID, pdfs=P)
+    prob = with_objective(make_problem(spiky(), GRID, refl), "stratified", 8)
+    pc = predict.path_colours(table, spiky(), refl, points=CELLS)
+    want = sum(w * np.sqrt(8 * linearised_de2(C, c, 8)) for w, C, c in zip(pc.weights, pc.C, pc.target))
+    assert objective.J(prob, P) == pytest.approx(want, rel=2e-3)
