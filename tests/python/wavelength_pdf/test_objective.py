@@ -17,6 +17,8 @@ from wavelength_pdf import problem as problem_mod
 from wavelength_pdf.problem import make_problem
 from wavelength_pdf.spectra import Spectrum
 
+from brute_force import lamp_colour, table_colours
+
 GRID = np.arange(380.0, 781.0, 20.0)  # 21 nodes
 
 
@@ -63,24 +65,13 @@ def brute_force(spectrum, P, n=100_000, uniform=False):
     """J, E[C] and std(C) from a fine midpoint rule in u, written independently of the
     objective: NumPy interpolation of the spectrum and colour-science's CIELAB/CIEDE2000."""
     lo, hi = GRID[0], GRID[-1]
-
-    def f(lam):
-        spec = np.interp(lam, spectrum.wavelengths, spectrum.values, left=0.0, right=0.0)
-        cmf = np.stack([np.interp(lam, _cmf_wl, _cmf[:, i], left=0.0, right=0.0) for i in range(3)], axis=-1)
-        return spec[..., None] * cmf
-
-    fine = np.unique(np.concatenate([np.linspace(lo, hi, 200_001), spectrum.wavelengths, _cmf_wl]))
-    fine = fine[(fine >= lo) & (fine <= hi)]
-    mid = 0.5 * (fine[1:] + fine[:-1])
-    c = np.sum(f(mid) * np.diff(fine)[:, None], axis=0)
+    f, c = lamp_colour(spectrum, lo, hi)
     u = (np.arange(n) + 0.5) / n
     if uniform:
         lam = np.asarray(sampling.sample_stratified_uniform(lo, hi, u))
         C = (hi - lo) / 4.0 * np.sum(f(lam), axis=0)
     else:
-        lam = np.asarray(jax.jit(sampling.sample_four)(GRID, P, u))
-        m = 4.0 * np.asarray(jax.jit(sampling.mixture_pdf)(GRID, P, lam))
-        C = np.sum(f(lam) / m[..., None], axis=0)
+        C = table_colours(f, GRID, P, u)
     C, c = C / c[1], c / c[1]
     white = colour.XYZ_to_xy(colorimetry.white_d65())
     dE = colour.delta_E(colour.XYZ_to_Lab(C, white), colour.XYZ_to_Lab(c, white), method="CIE 2000")

@@ -5,18 +5,19 @@ by name; bad names and sample counts refused before any work.
 """
 
 import colour
-import jax
 import numpy as np
 import pytest
 
 import wavelength_pdf  # noqa: F401  (enables float64)
-from wavelength_pdf import colorimetry, init, objective, sampling, uniform
+from wavelength_pdf import colorimetry, init, objective, uniform
 from wavelength_pdf import problem as problem_mod
 from wavelength_pdf.optimize import evaluate_table
 from wavelength_pdf.problem import make_problem, with_objective
 from wavelength_pdf.result import Result
 from wavelength_pdf.spectra import Spectrum
 from wavelength_pdf.table import Table
+
+from brute_force import lamp_colour, table_colours
 
 GRID = np.arange(380.0, 781.0, 20.0)  # 21 nodes
 #: Cells of the fine u grid of the independent computation (every N below divides it).
@@ -34,7 +35,6 @@ def random_table(seed):
     return np.random.default_rng(seed).uniform(0.2, 1.0, (4, GRID.size))
 
 
-_cmf_wl, _cmf = colorimetry.cmfs()
 _white = colour.XYZ_to_xy(colorimetry.white_d65())
 
 
@@ -45,20 +45,8 @@ def _lab(xyz):
 def path_colours(spectrum, P):
     """C(u) at the midpoints of CELLS equal cells of u and the target c (Y = 1), from the
     sampler and the mixture density alone (not the objective's quadrature)."""
-    lo, hi = GRID[0], GRID[-1]
-
-    def f(lam):
-        spec = np.interp(lam, spectrum.wavelengths, spectrum.values, left=0.0, right=0.0)
-        cmf = np.stack([np.interp(lam, _cmf_wl, _cmf[:, i], left=0.0, right=0.0) for i in range(3)], axis=-1)
-        return spec[..., None] * cmf
-
-    fine = np.unique(np.concatenate([np.linspace(lo, hi, 200_001), spectrum.wavelengths, _cmf_wl]))
-    fine = fine[(fine >= lo) & (fine <= hi)]
-    c = np.sum(f(0.5 * (fine[1:] + fine[:-1])) * np.diff(fine)[:, None], axis=0)
-    u = (np.arange(CELLS) + 0.5) / CELLS
-    lam = np.asarray(jax.jit(sampling.sample_four)(GRID, P, u))
-    m = 4.0 * np.asarray(jax.jit(sampling.mixture_pdf)(GRID, P, lam))
-    C = np.sum(f(lam) / m[..., None], axis=0)
+    f, c = lamp_colour(spectrum, GRID[0], GRID[-1])
+    C = table_colours(f, GRID, P, (np.arange(CELLS) + 0.5) / CELLS)
     return C / c[1], c / c[1]
 
 
