@@ -17,7 +17,7 @@ from wavelength_pdf.result import Result
 from wavelength_pdf.spectra import Spectrum
 from wavelength_pdf.table import Table
 
-from brute_force import lamp_colour, table_colours
+from brute_force import assert_gradient_matches_finite_differences, lamp_colour, table_colours
 
 GRID = np.arange(380.0, 781.0, 20.0)  # 21 nodes
 #: Cells of the fine u grid of the independent computation (every N below divides it).
@@ -92,17 +92,8 @@ def test_more_strata_never_hurt_and_one_stratum_is_independent_sampling(lamp):
 
 
 def test_gradient_matches_finite_differences(lamp):
-    vg = objective.value_and_grad(with_objective(lamp, "stratified", 16))
-    P = random_table(3)
-    J, g = vg(P)
-    g = np.asarray(g)
-    assert np.isfinite(float(J)) and np.all(np.isfinite(g))
-    rng = np.random.default_rng(0)
-    for _ in range(3):
-        d = rng.normal(size=P.shape) * P
-        h = 1e-6
-        fd = (float(vg(P + h * d)[0]) - float(vg(P - h * d)[0])) / (2 * h)
-        assert abs(fd - np.sum(g * d)) <= 1e-5 * max(abs(fd), 1e-3), (fd, np.sum(g * d))
+    assert_gradient_matches_finite_differences(objective.value_and_grad(with_objective(lamp, "stratified", 16)),
+                                               random_table(3))
 
 
 def test_J_stays_available_by_name_and_is_the_default(lamp):
