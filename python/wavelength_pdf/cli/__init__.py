@@ -130,16 +130,21 @@ def solver_args(parser: argparse.ArgumentParser, names: list[str]) -> None:
                              "solver's own); same input, seed and budget give the same table; a "
                              "multistage result above 0.05 x uniform J gets a second search of "
                              "1.5 N with more starts kept")
+    objective_options(parser, "what to minimize")
+    parser.add_argument("--quiet", "-q", action="store_true",
+                        help="no progress bar (the one-line summary is still printed)")
+
+
+def objective_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--objective`` and ``--objective-spp`` (design §4.6); ``what`` starts the help."""
     parser.add_argument("--objective", default="J", metavar="NAME",
-                        help="what to minimize (design §4.6): 'J', the mean CIEDE2000 of one "
+                        help=f"{what} (design §4.6): 'J', the mean CIEDE2000 of one "
                              "path's colour on a white surface (§4.1), or 'stratified', the "
                              "linearised CIEDE2000 of a pixel's mean of --objective-spp "
                              "stratified samples (default: J)")
     parser.add_argument("--objective-spp", type=positive_int, default=None, metavar="N",
                         help="with --objective stratified: the samples per pixel it models, "
                              "1..4096 (default: 64)")
-    parser.add_argument("--quiet", "-q", action="store_true",
-                        help="no progress bar (the one-line summary is still printed)")
 
 
 def objective_args(args: argparse.Namespace) -> tuple[str, int]:

@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 
-from wavelength_pdf.cli import PROG, SPECTRUM_HELP, Formatter
+from wavelength_pdf.cli import PROG, SPECTRUM_HELP, BadInput, Formatter, objective_args, objective_options
 from wavelength_pdf.coverage import coverage
 from wavelength_pdf.model import trapezoid
 from wavelength_pdf.spectra import load_spectra
@@ -15,6 +15,9 @@ from wavelength_pdf.table import read_table
 
 
 def cmd_show(args: argparse.Namespace) -> int:
+    objective, spp = objective_args(args)
+    if objective != "J" and not args.spectrum:
+        raise BadInput("--objective needs --spectrum (the table is scored for a spectrum)")
     table = read_table(args.table)
     grid, pdfs = table.grid, table.pdfs
     steps = np.diff(grid)
@@ -46,8 +49,9 @@ def cmd_show(args: argparse.Namespace) -> int:
             # Light the table never samples (design §1.5), as the renderer warns about it.
             for w in coverage(grid, pdfs, sp).warnings(sp.name):
                 print(f"{PROG}: warning: {w}", file=sys.stderr)
-            ev = evaluate_table(sp, table)
-            print(f"{sp.name}: J {ev.J:.6g} (J_fine {ev.J_fine:.6g}), uniform "
+            ev = evaluate_table(sp, table, objective=objective, objective_spp=spp)
+            named = "" if objective == "J" else f" [{ev.objective}]"
+            print(f"{sp.name}: J{named} {ev.J:.6g} (J_fine {ev.J_fine:.6g}), uniform "
                   f"{ev.J_uniform:.6g}, ratio {ev.J_over_uniform:.4f}")
             print(f"  health: bias_rel {ev.bias_rel:.3g}, std/c "
                   f"{'/'.join(f'{v:.4g}' for v in ev.std_rel)}, "
@@ -67,4 +71,5 @@ def add_parser(sub) -> None:
     s.add_argument("--spectrum", metavar="SPECTRUM",
                    help="evaluate J and health of the table for this spectrum (" +
                         SPECTRUM_HELP + ")")
+    objective_options(s, "with --spectrum, the objective J stands for")
     s.set_defaults(func=cmd_show)

@@ -114,6 +114,7 @@ def test_help_lists_the_solver_registry(capsys):
         (["optimize", "cie:A", "-o", "{tmp}/t.csv", "--objective", "stratified", "--objective-spp", "5000"],
          "1..4096"),
         (["batch", "{tmp}", "-o", "{tmp}/out", "--objective", "j"], "unknown objective 'j'"),
+        (["show", "{tmp}/bad.csv", "--objective", "stratified"], "--objective needs --spectrum"),
     ],
 )
 def test_bad_input_exits_2_with_message(tmp_path, capsys, argv, message):
@@ -327,6 +328,15 @@ def test_show_prints_grid_normalization_and_J(tmp_path, capsys):
     assert "# name: flat" in out
     j = objective.J(make_problem(load_spectrum("cie:D65"), grid), read_table(path).pdfs)
     assert f"D65: J {j:.6g}" in out, out
+    # By the pixel's objective (design §4.6), named.
+    from wavelength_pdf.problem import with_objective
+
+    assert cli.main(["show", str(path), "--spectrum", "cie:D65", "--objective", "stratified",
+                     "--objective-spp", "8"]) == 0
+    out = capsys.readouterr().out
+    j8 = objective.J(with_objective(make_problem(load_spectrum("cie:D65"), grid), "stratified", 8),
+                     read_table(path).pdfs)
+    assert f"D65: J [stratified, spp 8] {j8:.6g}" in out, out
 
 
 # --- end to end with the real optimizer ----------------------------------------------
