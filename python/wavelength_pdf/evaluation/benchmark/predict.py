@@ -30,7 +30,7 @@ from wavelength_pdf.evaluation.benchmark import grid as G
 
 #: The rows compared with the optimized table: the simple samplers, then the others the
 #: benchmark renders with a table (the acceptance figure is over the simple ones).
-COMPARED = (*G.SIMPLE, "start", "reference", G.SCENE_COLOURS, G.PIXEL)
+COMPARED = (*G.SIMPLE, "start", "reference", G.SCENE_COLOURS)
 TABLE = "optimized"
 #: The two regimes: the ColorChecker (patches lit directly) and every other scene.
 REGIMES = ("colorchecker", "scenes")

@@ -306,6 +306,57 @@ def summary_table(rows: Sequence[dict], spp: int, measure: str = MAIN) -> str:
     return head + "\n".join(lines) + "\n"
 
 
+#: A job has something to gain when its best simple sampler is more than this factor above
+#: the floor; the table "reaches the floor" there when its error above the floor is at most
+#: ``FLOOR_SHARE`` of the best simple sampler's.
+GAIN_ABOVE_FLOOR, FLOOR_SHARE = 1.1, 1.0 / 3.0
+
+
+def floor_at(rows: Sequence[dict], job: str, spp: int, measure: str = MAIN) -> float:
+    """The job's floor at ``spp``: rendered there, else the floor of the nearest lower spp
+    scaled by spp_floor / spp (path noise falls as 1 / spp); nan without one."""
+    have = sorted((r["spp"], r[measure]) for r in rows
+                  if r["job"] == job and r["row"] == G.FLOOR and r["spp"] <= spp)
+    if not have:
+        return float("nan")
+    n, e = have[-1]
+    return e * n / spp
+
+
+def above_floor_share(rows: Sequence[dict], job: str, row: str, spp: int, measure: str = MAIN) -> float:
+    """(row's error - floor) / (best simple sampler's - floor); nan where the best simple
+    sampler is within ``GAIN_ABOVE_FLOOR`` of the floor (nothing to gain) or a figure is missing."""
+    r, fl = _get(rows, job, row, spp), floor_at(rows, job, spp, measure)
+    if r is None or not math.isfinite(fl):
+        return float("nan")
+    best = best_simple(rows, job, spp, measure)[1]
+    if not best > GAIN_ABOVE_FLOOR * fl:
+        return float("nan")
+    return (r[measure] - fl) / (best - fl)
+
+
+def floor_table(rows: Sequence[dict], spp: int, tables: Sequence[str] = ("optimized", G.PIXEL),
+                measure: str = MAIN) -> str:
+    """Markdown: per regime, how many jobs have something to gain above the floor and in how
+    many each table's error above the floor is at most ``FLOOR_SHARE`` of the best simple
+    sampler's; median (range) of that share."""
+    tables = [t for t in tables if any(r["row"] == t and r["spp"] == spp for r in rows)]
+    head = ("| regime | jobs | nothing to gain | " + " | ".join(f"{t} reaches | {t}: share above floor" for t in tables)
+            + " |\n|" + "---|" * (3 + 2 * len(tables)) + "\n")
+    lines = []
+    for name, js in regimes(rows):
+        js = [j for j in js if _table(rows, j, spp) and math.isfinite(floor_at(rows, j, spp, measure))]
+        if not js:
+            continue
+        cells = []
+        nothing = sum(1 for j in js if not best_simple(rows, j, spp, measure)[1] > GAIN_ABOVE_FLOOR * floor_at(rows, j, spp, measure))
+        for t in tables:
+            sh = [x for x in (above_floor_share(rows, j, t, spp, measure) for j in js) if math.isfinite(x)]
+            cells.append(f"{sum(x <= FLOOR_SHARE for x in sh)} of {len(sh)} | {_spread(sh) if sh else '–'}")
+        lines.append(f"| {name} | {len(js)} | {nothing} | " + " | ".join(cells) + " |")
+    return head + "\n".join(lines) + "\n"
+
+
 def write_markdown(path: Path, rows: Sequence[dict], scores: Sequence[dict], et: Sequence[dict], spp: int,
                    command: str, images: Sequence[str]) -> None:
     """The report: checks, the ratio tables of both sweeps, equal time, the regime map."""
@@ -344,6 +395,15 @@ def write_markdown(path: Path, rows: Sequence[dict], scores: Sequence[dict], et:
         L.append(f"## Summary by regime, {n} spp\n\nMedian (min-max) over the regime's jobs of `{MAIN}` ratios; "
                  f"\"table pays\": the table beats the best simple sampler by {PAYS}x or more.\n")
         L.append(summary_table(rows, n))
+    for n in sorted({r["spp"] for r in rows}):
+        table = floor_table(rows, n)
+        if table.count("\n") > 2:
+            L.append(f"## Against the floor, {n} spp\n\nPer regime: the jobs whose best simple sampler is "
+                     f"within {GAIN_ABOVE_FLOOR}x of the floor (nothing to gain), and in how many of the others a "
+                     f"table's `{MAIN}` above the floor is at most {FLOOR_SHARE:.2f} of the best simple sampler's "
+                     "(the floor at a spp without one: the lower spp's, times its spp over this one); median "
+                     "(range) of that share.\n")
+            L.append(table)
     for sweep, title in (("scenes", "Scene sweep"), ("lamps", "Lamp sweep"), ("small", "Small grid")):
         for ps in ("sobol", "independent"):
             js = jobs_of(rows, sweep, ps)

@@ -116,6 +116,29 @@ def test_summary_by_regime():
     assert cells[-1] == "1 of 2"                # pays on one job
 
 
+def test_against_the_floor():
+    """A table's error above the floor as a share of the best simple sampler's: the floor
+    scaled from a lower spp as 1 / spp; a job with nothing to gain is counted apart."""
+    from wavelength_pdf.evaluation.benchmark import report
+
+    def row(job, name, spp, de2):
+        return {"job": job, "sweep": "lamps", "kind": "sodium", "pixel_sampler": "sobol", "row": name,
+                "spp": spp, "de2": de2, "share_removed_de2": 0.5}
+
+    rows = [row("a/x/sobol", "floor", 16, 4.0), row("a/x/sobol", "spd", 64, 5.0),
+            row("a/x/sobol", "optimized", 64, 2.0), row("a/x/sobol", G.PIXEL, 64, 3.0),
+            row("b/x/sobol", "floor", 64, 1.0), row("b/x/sobol", "spd", 64, 1.05),
+            row("b/x/sobol", "optimized", 64, 1.0), row("b/x/sobol", G.PIXEL, 64, 1.0)]
+    assert report.floor_at(rows, "a/x/sobol", 64) == 1.0   # 4 x 16 / 64
+    assert report.floor_at(rows, "a/x/sobol", 8) != report.floor_at(rows, "a/x/sobol", 8)  # none below
+    assert report.above_floor_share(rows, "a/x/sobol", "optimized", 64) == 0.25  # (2 - 1) / (5 - 1)
+    assert report.above_floor_share(rows, "a/x/sobol", G.PIXEL, 64) == 0.5
+    assert np.isnan(report.above_floor_share(rows, "b/x/sobol", "optimized", 64))  # 1.05 is within 1.1x
+    line = next(x for x in report.floor_table(rows, 64).splitlines() if x.startswith("| sodium"))
+    cells = [c.strip() for c in line.split("|")[1:-1]]
+    assert cells == ["sodium, sobol", "2", "1", "1 of 1", "0.25", "0 of 1", "0.50"]
+
+
 # --- The small benchmark, end to end -----------------------------------------------------
 
 
