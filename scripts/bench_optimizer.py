@@ -239,10 +239,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--list", action="store_true", help="print the default list and stop")
     p.add_argument("--csv", default=None, help="also write the rows to this CSV file")
     p.add_argument("--tables", default=None, help="also copy each table to this folder")
-    p.add_argument("extra", nargs=argparse.REMAINDER,
+    p.add_argument("extra", nargs="*", metavar="-- OPTION",
                    help="after '--': options passed to 'wavelength-pdf optimize'")
-    args = p.parse_args(argv)
-    extra = args.extra[1:] if args.extra[:1] == ["--"] else args.extra
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # Split at '--' before parsing: argparse would give what follows to the spectra.
+    extra = argv[argv.index("--") + 1:] if "--" in argv else []
+    args = p.parse_args(argv[:argv.index("--")] if "--" in argv else argv)
     specs = args.spectra or default_specs()
     if args.list:
         print("\n".join(specs))

@@ -68,21 +68,19 @@ def _refine_evaluations(search: int) -> int:
     return min(REFINE_EVALUATIONS, search)
 
 
-def _grid_and_problem(spectrum, grid: np.ndarray | str, reflectances, objective: str = "J",
-                      objective_spp: int = 1) -> tuple[np.ndarray, Problem]:
-    """The table grid and the problem on it, standing for ``objective`` (design §4.6).
-    "auto" chooses the grid on the lamp's problem on the default grid (``grids.auto_grid``),
-    which is already the problem to solve when that grid is kept and J has no surface
-    colours (smooth lamps): it is built once."""
+def _grid_and_problem(spectrum, grid: np.ndarray | str, reflectances) -> tuple[np.ndarray, Problem]:
+    """The table grid and the problem on it. "auto" chooses the grid on the lamp's problem
+    on the default grid (``grids.auto_grid``), which is already the problem to solve when
+    that grid is kept and J has no surface colours (smooth lamps): it is built once."""
     if isinstance(grid, str):
         if grid != "auto":
             raise ValueError(f"grid must be an array of wavelengths or 'auto', not {grid!r}")
         lamp = make_problem(spectrum, DEFAULT_GRID)
         grid = grids.auto_grid(lamp, DEFAULT_GRID)
         if reflectances is None and np.array_equal(grid, DEFAULT_GRID):
-            return grid, with_objective(lamp, objective, objective_spp)
+            return grid, lamp
     grid = np.asarray(grid, dtype=np.float64)
-    return grid, with_objective(make_problem(spectrum, grid, reflectances), objective, objective_spp)
+    return grid, make_problem(spectrum, grid, reflectances)
 
 
 @float64

@@ -141,6 +141,11 @@ TABLE_ROWS = ("uniform", "visible", "spd", "luminance", "xyz", "start", "optimiz
 #: The table optimized for the scene's own material colours (``optimize --reflectances scene``,
 #: design §4.5), on the scene sweep's low-discrepancy jobs under spiky lamps.
 SCENE_COLOURS = "optimized-scene"
+#: The same for a pixel of 64 stratified samples (``--objective stratified --reflectances
+#: scene``): both of the objective's models of the image at once, where SCENE_COLOURS is.
+PIXEL_SCENE = "optimized-pixel-scene"
+#: The rows optimized for the scene's own colours (their tables live in the job's folder).
+COLOUR_ROWS = (SCENE_COLOURS, PIXEL_SCENE)
 #: The simple samplers (no optimizer): "the best simple sampler" is the best of these.
 SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
 #: Check row: pbrt-v4's own visible sampling, which the ``visible`` table must match.
@@ -215,7 +220,10 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
     g = GridSpec(shared=shared)
     for s in LAMP_SWEEP_SCENES:
         for lamp in LAMPS.values():
-            add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), floor_spp=(16,), sweep="lamps"))
+            # The ColorChecker is what its patches show: tables for them too (the objective's
+            # colours, design §4.5, measured under every lamp).
+            add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), floor_spp=(16,), sweep="lamps",
+                       rows=TABLE_ROWS + (COLOUR_ROWS if s == "colorchecker" else ())))
     for s in SCENES.values():
         if s.key in ("project-box", "two-lamp-box"):
             continue
@@ -224,7 +232,7 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
             for ps in PIXEL_SAMPLERS:
                 colours = ps == "sobol" and (lamp is None or lamp.key == HEADLINE_LAMP)
                 add(g, Job(s, lamp, ps, sweep="scenes", spp=SPP if ps == "sobol" else SPP[:2],
-                           rows=TABLE_ROWS + ((SCENE_COLOURS,) if colours else ())))
+                           rows=TABLE_ROWS + (COLOUR_ROWS if colours else ())))
     return g
 
 

@@ -42,6 +42,8 @@ LO, HI = 380.0, 780.0
 SCORES_VERSION = "1"
 #: The rows whose tables the optimizer makes for a lamp (tasks on the cluster), by objective.
 OPTIMIZED = {"optimized": "J", G.PIXEL: "stratified"}
+#: The same for the rows optimized for the scene's own colours (tables in the job's folder).
+OPTIMIZED_FOR_COLOURS = {G.SCENE_COLOURS: "J", G.PIXEL_SCENE: "stratified"}
 #: Samplers of the reference's four chunks.
 TRUTH_ROWS = (G.BUILTIN, "uniform", "spd", "luminance")
 
@@ -129,7 +131,7 @@ def baseline_tables(spectrum: Spectrum, folder: Path, rows: Sequence[str], job: 
         if row in OPTIMIZED:
             paths[row] = folder / f"{row}.csv"
             continue
-        if row in ("reference", G.SCENE_COLOURS):
+        if row == "reference" or row in G.COLOUR_ROWS:
             continue
         path = folder / f"{row}.csv"
         if not path.is_file():
@@ -151,15 +153,15 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
     folder = job_folder(out, job)
     renders = folder / "renders"
     reflectances = None
-    if G.SCENE_COLOURS in job.rows:
+    if any(row in job.rows for row in G.COLOUR_ROWS):
         from wavelength_pdf.reflectances import load_reflectances
         from wavelength_pdf.spectra import SpectrumError
 
         try:
             reflectances = load_reflectances("scene", scene=scene, lo=LO, hi=HI, pbrt=pbrt)
-            tables[G.SCENE_COLOURS] = folder / f"{G.SCENE_COLOURS}.csv"
+            tables.update({row: folder / f"{row}.csv" for row in G.COLOUR_ROWS if row in job.rows})
         except SpectrumError:  # no diffuse colours in the scene (the glass of water): no such row
-            rows.remove(G.SCENE_COLOURS)
+            rows = [row for row in rows if row not in G.COLOUR_ROWS]
     p = JobPlan(job, folder, scene, spectrum, tables, reflectances)
     for spp in job.spp:
         for seed in job.seeds:
@@ -200,9 +202,9 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
     todo = [(p, r) for p in plans for r in p.renders() if r.done() is None or not _table_ready(r)]
-    optimize = {p.tables[row]: (p.spectrum, p.reflectances if row == G.SCENE_COLOURS else None,
-                                OPTIMIZED.get(row, "J"))
-                for p in plans for row in (*OPTIMIZED, G.SCENE_COLOURS)
+    made_by = {**OPTIMIZED, **OPTIMIZED_FOR_COLOURS}
+    optimize = {p.tables[row]: (p.spectrum, p.reflectances if row in OPTIMIZED_FOR_COLOURS else None, made_by[row])
+                for p in plans for row in made_by
                 if row in p.tables and not p.tables[row].is_file()}
     if not todo and not optimize:
         say("benchmark: every render is done (cached)")
