@@ -160,3 +160,22 @@ def test_with_surface_colours_it_is_the_weighted_mean_over_colours():
     pc = predict.path_colours(table, spiky(), refl, points=CELLS)
     want = sum(w * np.sqrt(8 * linearised_de2(C, c, 8)) for w, C, c in zip(pc.weights, pc.C, pc.target))
     assert objective.J(prob, P) == pytest.approx(want, rel=2e-3)
+
+
+def test_refine_never_returns_worse_than_the_initialization(lamp):
+    """A J search's table worse than the start by the chosen objective (here a random table
+    standing for it) is polished, and the initialization polished too: the result is never
+    worse than the start by that objective, and is accepted by the health rules."""
+    from wavelength_pdf import health, solvers
+    from wavelength_pdf.budget import Budget
+
+    prob = with_objective(lamp, "stratified", 16)
+    P0 = init.equal_mass_partition(prob)
+    start = solvers.Start.of(prob, P0)
+    bad = random_table(9)
+    assert objective.J(prob, bad) > start.J
+    out = solvers.refine(start, solvers.SolverResult(P=bad, J=objective.J(lamp, bad), nfev=7), Budget(20))
+    assert out.J <= start.J * (1 + 1e-12)
+    assert out.J == pytest.approx(objective.J(prob, out.P), rel=1e-12)
+    assert health.health(prob, out.P).accepted(start.health)
+    assert out.nfev > 7
