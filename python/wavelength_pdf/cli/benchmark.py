@@ -47,8 +47,9 @@ def add_parser(sub, out: Path) -> None:
         description="Renders every job of the benchmark (design §6.7): the lamp sweep (every lamp on two "
                     "cheap scenes) and the scene sweep (every scene under a handful of lamps, with the "
                     "low-discrepancy and the independent pixel sampler). Every sampler is a table (uniform, "
-                    "visible, spd, luminance, xyz, the optimizer's start, the optimized table, earlier "
-                    "work's tables), beside pbrt-v4's own visible sampling and a floor (--wavelength-repeats). "
+                    "visible, spd, luminance, xyz, the optimizer's start, the optimized table, the table "
+                    "optimized for a pixel (--objective stratified), the tables for the scene's own colours, "
+                    "earlier work's tables), beside pbrt-v4's own visible sampling and a floor (--wavelength-repeats). "
                     "Errors come from independent seed pairs (no reference needed) and against a reference "
                     "drawn with other samplers. Finished renders are reused: an interrupted run resumes. "
                     "Scenes and LSPDD lamps come from --shared; jobs whose material is missing are skipped.")
