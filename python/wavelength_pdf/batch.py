@@ -165,8 +165,8 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
     """Optimize every spectrum of ``folder`` into ``outdir``; returns the rows and summary.csv.
 
     Resumable: a table newer than its input, for the same objective (design §4.6), is kept
-    and its header fills its row (status ``kept``), unless ``force``. ``on_start(n)`` is told how many items will be optimized,
-    ``on_row(row)`` gets each finished row.
+    and its header fills its row (status ``kept``), unless ``force``. ``on_start(n)`` is
+    told how many items will be optimized, ``on_row(row)`` gets each finished row.
     """
     folder, outdir = Path(folder), Path(outdir)
     items, rows = plan_batch(folder, outdir, lo, hi)

@@ -76,18 +76,19 @@ def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Arra
     E[C^2] = (exact diagonal part, wavelength space) + (cross terms, u-quadrature): the
     quadrature only sees C^2 - sum_j (f_j / M_j)^2, which has no firefly peaks.
     """
+    stratified = "strata" in arr  # the value is then not J's, and J's CIEDE2000 is not taken
     if C.ndim == 2:  # one white surface: the sums the solvers were tuned on (their rounding
         # moves the optimum found on hard lamps), kept apart from the surface colours' axes
-        J = jnp.sum(wt * _delta_e(arr, C))
+        J = None if stratified else jnp.sum(wt * _delta_e(arr, C))
         m1 = jnp.sum(wt[:, None] * C, axis=0)
         cross = jnp.sum(wt[:, None] * (C * C - D), axis=0)
     else:
-        J = _mean_over_colours(arr, jnp.sum(wt * _delta_e(arr, C), axis=-1))
+        J = None if stratified else _mean_over_colours(arr, jnp.sum(wt * _delta_e(arr, C), axis=-1))
         m1 = jnp.sum(wt[:, None] * C, axis=-2)
         cross = jnp.sum(wt[:, None] * (C * C - D), axis=-2)
     c = arr["c"]
     m2 = diag_exact + cross - 2.0 * c * m1 + c * c
-    if "strata" in arr:
+    if stratified:
         J = stratified_value(arr, u, wt, C, D, diag_exact)
     return J, m1, m2
 

@@ -176,7 +176,7 @@ def optimize_spectrum(
         # J's search finds the basin, a polish by the chosen objective its bottom
         # (``solvers.refine``); every figure of the result is that objective's.
         problem = with_objective(problem, objective, objective_spp)
-        start = Start.of(problem, P0)
+        start = start.standing_for(problem)
         with single_threaded_blas():
             run = refine(start, run, budget.with_evaluations(_refine_evaluations(max_evaluations)),
                          progress=progress)

@@ -120,6 +120,13 @@ class Start:
         health = health_mod.health(problem, P)
         return cls(problem, P, health, objective.J(problem, P), J_uniform)
 
+    def standing_for(self, problem: Problem) -> Start:
+        """The same start judged on ``problem``, the same lamp standing for another objective
+        (design §4.6): its J and uniform sampling's taken again, its health kept (the health
+        rules do not depend on the objective)."""
+        return dataclasses.replace(self, problem=problem, J=objective.J(problem, self.P),
+                                   J_uniform=uniform.uniform_J(problem))
+
 
 @dataclass
 class SolverResult:
