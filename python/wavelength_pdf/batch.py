@@ -96,7 +96,7 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
         grid = job["grid"] if isinstance(job["grid"], str) else np.asarray(job["grid"])
         o = optimize_one(sp[0], out, grid, job["solver"], job["seed"], job["max_seconds"], None,
                          max_evals=job.get("max_evals"), objective=job.get("objective", "J"),
-                         objective_spp=job.get("objective_spp"))
+                         objective_spp=job.get("objective_spp"), reflectances=job.get("reflectances"))
         if o.written:
             return _row(spec, "written", "", o.result, str(out))
         return _row(spec, "not accepted", o.result.reason, o.result)
@@ -159,15 +159,19 @@ def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
 def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndarray | str,
               solver: str | None, seed: int, max_seconds: float | None = None,
               max_evals: int | None = None, objective: str = "J", objective_spp: int | None = None,
-              jobs: int = 1, force: bool = False,
+              reflectances=None, jobs: int = 1, force: bool = False,
               on_start: Callable[[int], None] | None = None,
               on_row: Callable[[dict], None] | None = None) -> tuple[list[dict], Path]:
     """Optimize every spectrum of ``folder`` into ``outdir``; returns the rows and summary.csv.
 
-    Resumable: a table newer than its input, for the same objective (design §4.6), is kept
-    and its header fills its row (status ``kept``), unless ``force``. ``on_start(n)`` is
-    told how many items will be optimized, ``on_row(row)`` gets each finished row.
+    Resumable: a table newer than its input, for the same objective (design §4.6) and surface
+    colours (``reflectances``, a :class:`~wavelength_pdf.reflectances.ReflectanceSet` or None
+    for the white surface; design §4.5), is kept and its header fills its row (status
+    ``kept``), unless ``force``. ``on_start(n)`` is told how many items will be optimized,
+    ``on_row(row)`` gets each finished row.
     """
+    from wavelength_pdf.reflectances import colours_label
+
     folder, outdir = Path(folder), Path(outdir)
     items, rows = plan_batch(folder, outdir, lo, hi)
     if not items and not rows:
@@ -181,6 +185,8 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
                 kept = Result.from_table(read_table(it.out))
                 if kept.objective != wanted:
                     raise TableError(f"made for the objective {kept.objective!r}")
+                if kept.source.partition("; reflectances: ")[2] != colours_label(reflectances):
+                    raise TableError("made for other surface colours")
                 rows.append(_row(it.spec, "kept", "table newer than input", kept, str(it.out)))
                 continue
             except TableError:
@@ -188,7 +194,8 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
         todo.append({"spec": it.spec, "out": str(it.out), "range": (lo, hi),
                      "grid": grid if isinstance(grid, str) else np.asarray(grid).tolist(),
                      "solver": solver, "seed": seed, "max_seconds": max_seconds,
-                     "max_evals": max_evals, "objective": objective, "objective_spp": objective_spp})
+                     "max_evals": max_evals, "objective": objective, "objective_spp": objective_spp,
+                     "reflectances": reflectances})
     if on_start is not None:
         on_start(len(todo))
     report = on_row or (lambda row: None)

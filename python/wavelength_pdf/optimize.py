@@ -206,10 +206,12 @@ def starting_table(spectrum, *, grid: np.ndarray | str = "auto", reflectances=No
 
 def _source(spectrum, reflectances) -> str:
     """The record's ``source``: the spectrum's, and the surface colours J was taken over."""
+    from wavelength_pdf.reflectances import colours_label
+
     src = getattr(spectrum, "source", "")
     if reflectances is None:
         return src
-    return f"{src}; reflectances: {reflectances.name} ({len(reflectances)} colours, {reflectances.source})"
+    return f"{src}; reflectances: {colours_label(reflectances)}"
 
 
 @float64

@@ -30,7 +30,7 @@ from wavelength_pdf.files import MAX_INPUT_BYTES, InputFileError, read_regular_f
 from wavelength_pdf.spectra import SpectrumError
 
 __all__ = ["ReflectanceSet", "colorchecker", "read_reflectances", "scene_reflectances",
-           "load_reflectances", "REFLECTANCE_SETS"]
+           "load_reflectances", "colours_label", "REFLECTANCE_SETS"]
 
 #: The names ``--reflectances`` takes besides a file.
 REFLECTANCE_SETS = ("scene", "colorchecker")
@@ -211,3 +211,11 @@ def load_reflectances(spec: str, scene: str | os.PathLike | None = None, lo: flo
                                 "spectrum to optimize for")
         return scene_reflectances(scene, lo, hi, pbrt)
     return read_reflectances(spec, lo, hi)
+
+
+def colours_label(reflectances: ReflectanceSet | None) -> str:
+    """How a table's record names the surface colours it was made for (its ``source`` line
+    after ``; reflectances: ``): '' for the white surface of design §4.1."""
+    if reflectances is None:
+        return ""
+    return f"{reflectances.name} ({len(reflectances)} colours, {reflectances.source})"

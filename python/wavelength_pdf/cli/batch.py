@@ -17,6 +17,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
     grid = make_grid(lo, hi, args.grid_step)
     check_solver(args.solver)
     objective, objective_spp = objective_args(args)
+    reflectances = _colours(args.reflectances, lo, hi)
     state: dict[str, Any] = {"bar": None}
 
     def start(n: int) -> None:
@@ -34,7 +35,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
                                   solver=args.solver, seed=args.seed,
                                   max_seconds=args.max_seconds, max_evals=args.max_evals,
                                   objective=objective, objective_spp=objective_spp,
-                                  jobs=max(1, args.jobs or 1), force=args.force,
+                                  reflectances=reflectances, jobs=max(1, args.jobs or 1), force=args.force,
                                   on_start=start, on_row=row)
     except BatchError as e:
         raise BadInput(str(e)) from None
@@ -48,6 +49,22 @@ def cmd_batch(args: argparse.Namespace) -> int:
     if any(r["status"] == "error" for r in bad):
         return EXIT_BAD_INPUT
     return EXIT_NOT_ACCEPTED if bad else 0
+
+
+def _colours(choice: str, lo: float, hi: float):
+    """``--reflectances``: None for the white surface, else the set (read before any work)."""
+    from wavelength_pdf.reflectances import WHITE, load_reflectances
+    from wavelength_pdf.spectra import SpectrumError
+
+    if choice == WHITE:
+        return None
+    if choice == "scene":
+        raise BadInput("--reflectances scene is optimize's, for one .pbrt scene; batch takes "
+                       "'white', 'colorchecker' or a CSV file of reflectances")
+    try:
+        return load_reflectances(choice, lo=lo, hi=hi)
+    except (SpectrumError, OSError) as e:
+        raise BadInput(f"--reflectances: {e}") from None
 
 
 def _report(row: dict[str, Any], bar, quiet: bool) -> None:
@@ -76,6 +93,12 @@ def add_parser(sub, names: list[str]) -> None:
                         "as with one")
     b.add_argument("--force", action="store_true",
                    help="redo every spectrum, even where a newer table exists")
+    b.add_argument("--reflectances", metavar="SET", default="white",
+                   help="the surface colours every table is optimized for (design §4.5): "
+                        "'white' (one white surface, design §4.1; default), 'colorchecker' "
+                        "(the 24 patches colour-science ships) or a CSV file (design §3.4: a "
+                        "wavelength column, then one column per reflectance). A kept table "
+                        "made for other colours is optimized again")
     solver_args(b, names)
     range_args(b)
     b.set_defaults(func=cmd_batch)

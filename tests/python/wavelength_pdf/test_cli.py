@@ -50,7 +50,7 @@ def _fake_optimizer(monkeypatch, accepted: bool = True) -> list:
         if progress is not None:
             progress(1, 2.0)
             progress(2, 1.0)
-        r = optimize.evaluate_table(spectrum, Table(grid=np.asarray(grid), pdfs=P))
+        r = optimize.evaluate_table(spectrum, Table(grid=np.asarray(grid), pdfs=P), reflectances)
         r.solver, r.seed, r.message = solver or "stand-in", seed, "stand-in"
         return r
 
@@ -114,6 +114,8 @@ def test_help_lists_the_solver_registry(capsys):
         (["optimize", "cie:A", "-o", "{tmp}/t.csv", "--objective", "stratified", "--objective-spp", "5000"],
          "1..4096"),
         (["batch", "{tmp}", "-o", "{tmp}/out", "--objective", "j"], "unknown objective 'j'"),
+        (["batch", "{tmp}", "-o", "{tmp}/out", "--reflectances", "scene"], "optimize's, for one .pbrt scene"),
+        (["batch", "{tmp}", "-o", "{tmp}/out", "--reflectances", "{tmp}/none.csv"], "none.csv"),
         (["show", "{tmp}/bad.csv", "--objective", "stratified"], "--objective needs --spectrum"),
     ],
 )
@@ -287,6 +289,26 @@ def test_batch_tables_summary_and_resume(tmp_path, monkeypatch, capsys):
     later = (out / "tiny.csv").stat().st_mtime + 10
     os.utime(folder / "tiny.spd", (later, later))
     cli.main(["batch", str(folder), "-o", str(out), "--quiet"])
+    assert calls == ["tiny"]
+
+
+def test_batch_for_surface_colours_redoes_white_tables(tmp_path, monkeypatch, capsys):
+    """--reflectances colorchecker: every table is made for the 24 patches (design §4.5) and
+    says so; a kept white table is redone, a kept ColorChecker table is kept."""
+    calls = _fake_optimizer(monkeypatch)
+    folder, out = tmp_path / "in", tmp_path / "out"
+    folder.mkdir()
+    (folder / "tiny.spd").write_bytes((DATA / "spectra" / "tiny.spd").read_bytes())
+    assert cli.main(["batch", str(folder), "-o", str(out), "--quiet"]) == 0
+    assert "reflectances" not in read_header(read_table(out / "tiny.csv"))["source"]
+    for expected in (["tiny"], []):
+        calls.clear()
+        assert cli.main(["batch", str(folder), "-o", str(out), "--quiet", "--reflectances", "colorchecker"]) == 0
+        assert calls == expected
+        assert read_header(read_table(out / "tiny.csv"))["source"].endswith(
+            "; reflectances: colorchecker (24 colours, colour.SDS_COLOURCHECKERS['ColorChecker N Ohta'])")
+    calls.clear()
+    cli.main(["batch", str(folder), "-o", str(out), "--quiet"])  # back to white: redone
     assert calls == ["tiny"]
 
 

@@ -146,6 +146,11 @@ SCENE_COLOURS = "optimized-scene"
 PIXEL_SCENE = "optimized-pixel-scene"
 #: The rows optimized for the scene's own colours (their tables live in the job's folder).
 COLOUR_ROWS = (SCENE_COLOURS, PIXEL_SCENE)
+#: The lamp's table optimized for a fixed, generic colour set (``optimize --reflectances
+#: colorchecker``: the ColorChecker's 24 patches, design §4.5) rather than a white surface:
+#: one per lamp like ``optimized``, rendered on the scene sweep, whose scenes show other
+#: colours, to see whether colours the table was not made for still gain over white.
+GENERIC_COLOURS = "optimized-colorchecker"
 #: The simple samplers (no optimizer): "the best simple sampler" is the best of these.
 SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
 #: Check row: pbrt-v4's own visible sampling, which the ``visible`` table must match.
@@ -232,7 +237,8 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
             for ps in PIXEL_SAMPLERS:
                 colours = ps == "sobol" and (lamp is None or lamp.key == HEADLINE_LAMP)
                 add(g, Job(s, lamp, ps, sweep="scenes", spp=SPP if ps == "sobol" else SPP[:2],
-                           rows=TABLE_ROWS + (COLOUR_ROWS if colours else ())))
+                           rows=TABLE_ROWS + (COLOUR_ROWS if colours else ())
+                           + ((GENERIC_COLOURS,) if ps == "sobol" else ())))
     return g
 
 

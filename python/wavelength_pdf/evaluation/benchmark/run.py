@@ -44,6 +44,8 @@ SCORES_VERSION = "1"
 OPTIMIZED = {"optimized": "J", G.PIXEL: "stratified"}
 #: The same for the rows optimized for the scene's own colours (tables in the job's folder).
 OPTIMIZED_FOR_COLOURS = {G.SCENE_COLOURS: "J", G.PIXEL_SCENE: "stratified"}
+#: The rows whose lamp tables are optimized for a named colour set: row -> (objective, set).
+OPTIMIZED_FOR_SET = {G.GENERIC_COLOURS: ("J", "colorchecker")}
 #: Samplers of the reference's four chunks.
 TRUTH_ROWS = (G.BUILTIN, "uniform", "spd", "luminance")
 
@@ -128,7 +130,7 @@ def baseline_tables(spectrum: Spectrum, folder: Path, rows: Sequence[str], job: 
     }
     needed = set(rows) | {G.FLOOR_TABLE} | (set(TRUTH_ROWS) - {G.BUILTIN})
     for row in sorted(needed):
-        if row in OPTIMIZED:
+        if row in OPTIMIZED or row in OPTIMIZED_FOR_SET:
             paths[row] = folder / f"{row}.csv"
             continue
         if row == "reference" or row in G.COLOUR_ROWS:
@@ -190,6 +192,18 @@ def _table_task(spectrum: Spectrum, path: Path, reflectances=None, objective: st
     return table_task(spectrum, path, LO, HI, reflectances, objective)
 
 
+def _made_by(row: str, p: JobPlan) -> tuple[object | None, str]:
+    """The colours and the objective an optimized row's table is made for."""
+    if row in OPTIMIZED_FOR_SET:
+        from wavelength_pdf.reflectances import load_reflectances
+
+        objective, colours = OPTIMIZED_FOR_SET[row]
+        return load_reflectances(colours, lo=LO, hi=HI), objective
+    if row in OPTIMIZED_FOR_COLOURS:
+        return p.reflectances, OPTIMIZED_FOR_COLOURS[row]
+    return None, OPTIMIZED[row]
+
+
 def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str | None = None,
         nthreads: int | None = None, say: Callable[[str], None] | None = None) -> None:
     """Optimize the missing tables and render every image not rendered yet, on a Dask cluster
@@ -202,9 +216,8 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
     todo = [(p, r) for p in plans for r in p.renders() if r.done() is None or not _table_ready(r)]
-    made_by = {**OPTIMIZED, **OPTIMIZED_FOR_COLOURS}
-    optimize = {p.tables[row]: (p.spectrum, p.reflectances if row in OPTIMIZED_FOR_COLOURS else None, made_by[row])
-                for p in plans for row in made_by
+    optimize = {p.tables[row]: (p.spectrum, *_made_by(row, p))
+                for p in plans for row in (*OPTIMIZED, *OPTIMIZED_FOR_COLOURS, *OPTIMIZED_FOR_SET)
                 if row in p.tables and not p.tables[row].is_file()}
     if not todo and not optimize:
         say("benchmark: every render is done (cached)")

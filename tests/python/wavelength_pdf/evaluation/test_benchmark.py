@@ -97,6 +97,34 @@ def test_grid_has_the_lamps_and_scenes_it_promises():
         assert not g.jobs and len(g.skipped) == 3
 
 
+def test_optimized_rows_name_the_colours_their_tables_are_made_for(tmp_path):
+    """The optimizer's inputs per row: white for the lamp's tables, the scene's colours for the
+    scene rows, the ColorChecker's 24 patches for the generic-colour row (a lamp table, in
+    the lamp's folder, on the scene sweep's low-discrepancy jobs only)."""
+    from types import SimpleNamespace
+
+    from wavelength_pdf.evaluation.benchmark import run
+    from wavelength_pdf.spectra import load_spectrum
+
+    p = SimpleNamespace(reflectances="the scene's colours")
+    assert run._made_by("optimized", p) == (None, "J")
+    assert run._made_by(G.PIXEL, p) == (None, "stratified")
+    assert run._made_by(G.SCENE_COLOURS, p) == ("the scene's colours", "J")
+    assert run._made_by(G.PIXEL_SCENE, p) == ("the scene's colours", "stratified")
+    colours, objective = run._made_by(G.GENERIC_COLOURS, p)
+    assert (colours.name, len(colours), objective) == ("colorchecker", 24, "J")
+    job = G.Job(G.SCENES["cornell-box"], G.LAMPS["2482"], rows=(G.GENERIC_COLOURS,))
+    folder = run.lamp_folder(tmp_path, job)
+    paths = run.baseline_tables(load_spectrum("cie:FL2"), folder, job.rows, job, tmp_path)
+    # Named in the lamp's folder, left to the optimizer (not written as a simple table).
+    assert paths[G.GENERIC_COLOURS] == tmp_path / "tables" / "2482" / f"{G.GENERIC_COLOURS}.csv"
+    assert not paths[G.GENERIC_COLOURS].exists() and paths["spd"].is_file()
+    g = G.full_grid()
+    for j in g.jobs:
+        if "scenes" in j.sweep.split("+"):
+            assert (G.GENERIC_COLOURS in j.rows) == (j.pixel_sampler == "sobol"), j.name
+
+
 def test_summary_by_regime():
     """The regime summary's medians come from the jobs' own ratios: a job whose table has a
     quarter of the best simple sampler's error and one where it has the same."""
