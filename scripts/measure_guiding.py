@@ -49,8 +49,10 @@ SAMPLERS = {
 
 
 def optimized_tables(pbrt: Path, scene: Path, common: list[str], guiding: tuple[str, ...], work: Path,
-                     threads: int, batch_args: list[str]) -> tuple[Path, float]:
-    """The pre-pass's mixture spectra, optimized by ``wavelength-pdf batch``: (folder, seconds)."""
+                     threads: int, batch_args: list[str], colours: str = "white") -> tuple[Path, float]:
+    """The pre-pass's mixture spectra, optimized by ``wavelength-pdf batch`` for ``colours``
+    (design §4.5; ``scene``: the scene's own materials, ``pbrt --material-reflectances``):
+    (folder, seconds, the renderer's material listing included)."""
     spectra, tables = work / "spectra", work / "tables"
     spectra.mkdir(parents=True, exist_ok=True)
     r = subprocess.run([str(pbrt), *common, "--wavelength-guiding", *guiding,
@@ -58,6 +60,14 @@ def optimized_tables(pbrt: Path, scene: Path, common: list[str], guiding: tuple[
     if r.returncode != 0:
         sys.exit(r.stderr)
     start = time.perf_counter()
+    if colours == "scene":
+        materials = work / "materials.csv"
+        r = subprocess.run([str(pbrt), "--material-reflectances", str(materials), str(scene)],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            sys.exit(r.stderr)
+        colours = str(materials)
+    batch_args = [*batch_args, "--reflectances", colours]
     r = subprocess.run([sys.executable, "-m", "wavelength_pdf", "batch", str(spectra), "-o", str(tables),
                         "--jobs", str(threads), "--quiet", *batch_args], capture_output=True, text=True,
                        env={**os.environ, "PYTHONPATH": str(REPO / "python")})
@@ -111,6 +121,9 @@ def main() -> int:
     ap.add_argument("--guiding-args", default="", help="extra flags for the guided renders")
     ap.add_argument("--batch-args", default="", help="extra flags for wavelength-pdf batch (e.g. "
                     "'--range 360 830 --grid-step 5'; default: its own range, 380-780 nm)")
+    ap.add_argument("--colours", default="white", help="the surface colours the mixture tables are optimized "
+                    "for (wavelength-pdf batch --reflectances): white (default), colorchecker, scene (the "
+                    "scene's own materials) or a reflectance CSV")
     ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
     ap.add_argument("--scenes", nargs="+", default=list(SCENES), help="benchmark scenes (default: %(default)s)")
     a = ap.parse_args()
@@ -123,7 +136,7 @@ def main() -> int:
             common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp)]
             guiding = tuple(a.guiding_args.split())
             tables, optimizer_s = optimized_tables(a.pbrt, scene, common, guiding, tmp / name, a.threads,
-                                                  a.batch_args.split())
+                                                  a.batch_args.split(), a.colours)
             print(f"{name}: optimized {len(list(tables.glob('*.csv'))) - 1} mixture tables in "
                   f"{optimizer_s:.1f} s", file=sys.stderr)
             images, cpu, prepass, guide_bytes = {}, {}, {}, {}
@@ -177,6 +190,7 @@ def main() -> int:
                              # the share of emission's error above the floor that is left
                              "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}",
                              "optimizer_s": f"{optimizer_s:.1f}" if sampler == "guided-optimized" else "",
+                             "colours": a.colours if sampler == "guided-optimized" else "",
                              # the pre-pass and the tables' share of the render's CPU time, and the
                              # guide's memory (tables + tile map) against the film's 32 bytes a pixel
                              "prepass_share": f"{np.mean(prepass[sampler]) / t:.4f}" if sampler in prepass else "",
