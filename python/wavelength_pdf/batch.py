@@ -178,9 +178,13 @@ def run_batch(folder: Path, outdir: Path, *, lo: float, hi: float, grid: np.ndar
         raise BatchError(f"{folder}: no spectrum files ({', '.join(SPECTRUM_SUFFIXES)})")
     outdir.mkdir(parents=True, exist_ok=True)
     wanted = objective_label(objective, DEFAULT_OBJECTIVE_SPP if objective_spp is None else objective_spp)
+    # A table older than the reflectance file it was made for is redone too.
+    colours_file = Path(reflectances.source) if reflectances is not None else None
+    colours_time = colours_file.stat().st_mtime if colours_file is not None and colours_file.is_file() else 0.0
     todo: list[dict[str, Any]] = []
     for it in items:
-        if not force and it.out.is_file() and it.out.stat().st_mtime >= it.source.stat().st_mtime:
+        if (not force and it.out.is_file()
+                and it.out.stat().st_mtime >= max(it.source.stat().st_mtime, colours_time)):
             try:
                 kept = Result.from_table(read_table(it.out))
                 if kept.objective != wanted:

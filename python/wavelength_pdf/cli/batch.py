@@ -35,7 +35,8 @@ def cmd_batch(args: argparse.Namespace) -> int:
                                   solver=args.solver, seed=args.seed,
                                   max_seconds=args.max_seconds, max_evals=args.max_evals,
                                   objective=objective, objective_spp=objective_spp,
-                                  reflectances=reflectances, jobs=max(1, args.jobs or 1), force=args.force,
+                                  reflectances=reflectances, jobs=max(1, args.jobs or 1),
+                                  force=args.force,
                                   on_start=start, on_row=row)
     except BatchError as e:
         raise BadInput(str(e)) from None

@@ -310,6 +310,16 @@ def test_batch_for_surface_colours_redoes_white_tables(tmp_path, monkeypatch, ca
     calls.clear()
     cli.main(["batch", str(folder), "-o", str(out), "--quiet"])  # back to white: redone
     assert calls == ["tiny"]
+    # A reflectance file: its tables are kept until the file changes.
+    colours = tmp_path / "colours.csv"
+    colours.write_text("lambda_nm,grey,red\n380,0.5,0.1\n780,0.5,0.8\n")
+    for touch, expected in ((False, ["tiny"]), (False, []), (True, ["tiny"])):
+        if touch:
+            later = (out / "tiny.csv").stat().st_mtime + 10
+            os.utime(colours, (later, later))
+        calls.clear()
+        assert cli.main(["batch", str(folder), "-o", str(out), "--quiet", "--reflectances", str(colours)]) == 0
+        assert calls == expected
 
 
 def test_batch_parallel_workers_report_errors(tmp_path, capsys):

@@ -99,7 +99,8 @@ def _fmt(x: float, digits: int = 2) -> str:
 
 
 def ratio_table(rows: Sequence[dict], jobs: Sequence[str], spp: int, measure: str = MAIN,
-                extra: Sequence[str] = (G.PIXEL, "reference", *G.COLOUR_ROWS, G.GENERIC_COLOURS, G.BUILTIN)) -> str:
+                extra: Sequence[str] = (G.PIXEL, "reference", *G.COLOUR_ROWS, G.GENERIC_COLOURS,
+                                        G.BUILTIN)) -> str:
     """Markdown: per job, each sampler's error over the table's, the best simple one, the
     table's share of the removable error and the floor's share of the table's error."""
     cols = [c for c in (*G.SIMPLE, "start", *extra) if any(_get(rows, j, c, spp) for j in jobs)]
@@ -163,7 +164,8 @@ def plot_errors(rows: Sequence[dict], jobs: Sequence[str], path: Path, measure: 
     cols = min(4, n)
     fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3.2 * cols, 2.6 * ((n + cols - 1) // cols)),
                              squeeze=False)
-    order = [*G.SIMPLE, "start", "reference", *G.COLOUR_ROWS, G.PIXEL, "optimized", G.FLOOR, G.GENERIC_COLOURS]
+    order = [*G.SIMPLE, "start", "reference", *G.COLOUR_ROWS, G.PIXEL, "optimized", G.FLOOR,
+             G.GENERIC_COLOURS]
     # One colour per row in every panel (a panel without a row must not shift the others').
     styles = {row: dict(color=f"C{i}") for i, row in enumerate(order)}
     styles["optimized"] = dict(color="k", lw=2)
@@ -335,7 +337,8 @@ def above_floor_share(rows: Sequence[dict], job: str, row: str, spp: int, measur
     return (r[measure] - fl) / (best - fl)
 
 
-def floor_table(rows: Sequence[dict], spp: int, tables: Sequence[str] = ("optimized", G.PIXEL, *G.COLOUR_ROWS, G.GENERIC_COLOURS),
+def floor_table(rows: Sequence[dict], spp: int,
+                tables: Sequence[str] = ("optimized", G.PIXEL, *G.COLOUR_ROWS, G.GENERIC_COLOURS),
                 measure: str = MAIN) -> str:
     """Markdown: per regime, how many jobs have something to gain above the floor and in how
     many each table's error above the floor is at most ``FLOOR_SHARE`` of the best simple
