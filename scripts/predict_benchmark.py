@@ -38,9 +38,12 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, nargs="+", default=[16, 64], help="sample counts (default 16 64)")
     ap.add_argument("--candidates", nargs="+", default=list(BP.CANDIDATES), choices=BP.CANDIDATES,
                     help="predictions to evaluate (default all; +floor variants follow their base)")
-    ap.add_argument("--colours", choices=("white", "colorchecker"), default="white",
-                    help="what the lamp lights in the predictions: a white surface (default), or on the "
-                         "ColorChecker jobs its 24 patches")
+    ap.add_argument("--colours", choices=BP.COLOURS, default="white",
+                    help="what the lamp lights in the predictions: a white surface (default); on the "
+                         "ColorChecker jobs its 24 patches (colorchecker); or every job's own scene "
+                         "colours, as the renderer builds them (scene; white where a scene has none)")
+    ap.add_argument("--pbrt", type=Path, default=None,
+                    help="with --colours scene: the renderer (default: as design §7)")
     ap.add_argument("--only", nargs="+", default=None, metavar="PREFIX", help="only jobs whose name starts so")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
@@ -74,7 +77,7 @@ def main(argv=None) -> int:
         print("predict_benchmark: no job selected", file=sys.stderr)
         return 2
     t0 = time.time()
-    recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say)
+    recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say, out=a.outdir, pbrt=a.pbrt)
     BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates])
     cands = [*a.candidates, *(f for f in BP.FLOORED if f.split("+")[0] in a.candidates)]
     prs = BP.pairs(recs, cands)

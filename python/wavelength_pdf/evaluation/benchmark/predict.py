@@ -120,28 +120,50 @@ def spectrum_of(j: JobInputs):
                     np.asarray(t.pdfs, np.float64).sum(axis=0))
 
 
+#: What the lamp lights in the predictions: a white surface; on the ColorChecker jobs its 24
+#: patches (white elsewhere); or every job's own scene colours (``pbrt --material-reflectances``
+#: on the job's scene copy, design §5.6; white where the scene has no diffuse colours).
+COLOURS = ("white", "colorchecker", "scene")
+
+
 def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Sequence[int] = (16, 64),
                  candidates: Sequence[str] = CANDIDATES, colours: str = "white",
-                 say: Callable[[str], None] = lambda m: None) -> list[dict]:
+                 say: Callable[[str], None] = lambda m: None, out: Path | None = None,
+                 pbrt: Path | None = None) -> list[dict]:
     """One record per (job, spp, row incl. the table): the measured de2 and floor, and each
     candidate's prediction (white-surface units). C(u) is tabulated once per lamp, table and
-    colour set, and shared by every job and spp that uses it."""
+    colour set, and shared by every job and spp that uses it. ``colours`` is one of
+    :data:`COLOURS`; ``scene`` reads each job's scene copy under ``out`` with ``pbrt``."""
     from wavelength_pdf import predict as P
-    from wavelength_pdf.reflectances import colorchecker
+    from wavelength_pdf.reflectances import colorchecker, colours_label, load_reflectances
+    from wavelength_pdf.spectra import SpectrumError
     from wavelength_pdf.table import read_table
 
+    if colours not in COLOURS:
+        raise ValueError(f"colours must be one of {COLOURS}, not {colours!r}")
+    if colours == "scene" and out is None:
+        raise ValueError("colours 'scene' needs the benchmark's folder (out)")
     meas = {(r["job"], r["row"], r["spp"]): r for r in results}
     cache: dict[tuple, object] = {}
     spectra: dict[str, object] = {}
+    by_scene: dict[str, object] = {}
     refl = colorchecker(LO, HI) if colours == "colorchecker" else None
-    out = []
+    recs = []
     for n, j in enumerate(jobs):
         say(f"predict: {n + 1}/{len(jobs)} {j.job}")
         use_refl = refl if (refl is not None and j.scene == "colorchecker") else None
+        if colours == "scene":
+            if j.scene not in by_scene:  # a scene's materials do not depend on its lamp
+                try:
+                    by_scene[j.scene] = load_reflectances("scene", scene=out / "jobs" / j.job / "scene.pbrt",
+                                                          lo=LO, hi=HI, pbrt=pbrt)
+                except SpectrumError:  # no diffuse colours (the glass of water): the white surface
+                    by_scene[j.scene] = None
+            use_refl = by_scene[j.scene]
         if j.spectrum not in spectra:
             spectra[j.spectrum] = spectrum_of(j)
         for row, path in j.tables.items():
-            key = (str(path), j.spectrum, use_refl is not None)
+            key = (str(path), j.spectrum, j.scene if colours == "scene" else colours_label(use_refl))
             if key not in cache:
                 cache[key] = P.path_colours(read_table(path), spectra[j.spectrum], use_refl)
             pc = cache[key]
@@ -154,8 +176,8 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
                        "floor": floor_of(meas, j.job, spp)}
                 for c in candidates:
                     rec[c] = P.CANDIDATES[c](pc, spp, j.pixel_sampler)
-                out.append(rec)
-    return out
+                recs.append(rec)
+    return recs
 
 
 def floor_of(meas: dict, job: str, spp: int) -> float:

@@ -52,6 +52,32 @@ def test_a_table_against_itself_is_ratio_one_and_uniform_is_worse(tmp_path):
         assert prs["uniform"][c] > 1.0, c
 
 
+def test_scene_colours_are_each_jobs_materials(tmp_path, pbrt):
+    """--colours scene: a job's predictions are those for its scene copy's own materials (as
+    the renderer builds them), not the white surface's; an unknown colour set is refused."""
+    from wavelength_pdf import predict as P
+    from wavelength_pdf.reflectances import scene_reflectances
+    from wavelength_pdf.table import read_table
+
+    out, results = _bench(tmp_path)
+    folder = out / "jobs" / "colorchecker" / "cie-FL2" / "sobol"
+    folder.mkdir(parents=True)
+    scene = folder / "scene.pbrt"
+    scene.write_bytes((REPO / "tests" / "data" / "scenes" / "two-lamps.pbrt").read_bytes())
+    jobs, _ = BP.plan(results, out, tmp_path / "no-shared")
+    white = BP.predict_jobs(results, jobs, (16,), ("covariance",))
+    coloured = BP.predict_jobs(results, jobs, (16,), ("covariance",), "scene", out=out, pbrt=pbrt)
+    lamp = load_spectrum("cie:FL2", 380.0, 780.0)
+    materials = scene_reflectances(scene, pbrt=pbrt)
+    for w, c in zip(white, coloured):
+        table = read_table(jobs[0].tables[c["row"]])
+        expected = P.covariance_de2(P.path_colours(table, lamp, materials), 16)
+        assert c["covariance"] == pytest.approx(expected, rel=1e-9)
+        assert c["covariance"] != pytest.approx(w["covariance"], rel=1e-3)
+    with pytest.raises(ValueError, match="colours must be one of"):
+        BP.predict_jobs(results, jobs, (16,), ("covariance",), "patches")
+
+
 def test_a_missing_table_is_named(tmp_path):
     out, results = _bench(tmp_path)
     (out / "tables" / "cie-FL2" / "spd.csv").unlink()
