@@ -41,9 +41,12 @@ def main(argv=None) -> int:
     ap.add_argument("--colours", choices=BP.COLOURS, default="white",
                     help="what the lamp lights in the predictions: a white surface (default); on the "
                          "ColorChecker jobs its 24 patches (colorchecker); or every job's own scene "
-                         "colours, as the renderer builds them (scene; white where a scene has none)")
+                         "colours, as the renderer builds them (scene; white where a scene has none); or "
+                         "every lit pixel's own spectrum, from one render of each scene under a flat lamp "
+                         "(pixels: covariance and covariance-lab only; +floor adds the measured floor "
+                         "unscaled, the prediction being in the image's units)")
     ap.add_argument("--pbrt", type=Path, default=None,
-                    help="with --colours scene: the renderer (default: as design §7)")
+                    help="with --colours scene or pixels: the renderer (default: as design §7)")
     ap.add_argument("--only", nargs="+", default=None, metavar="PREFIX", help="only jobs whose name starts so")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
@@ -77,8 +80,16 @@ def main(argv=None) -> int:
         print("predict_benchmark: no job selected", file=sys.stderr)
         return 2
     t0 = time.time()
+    if a.colours == "pixels":
+        a.candidates = [c for c in a.candidates if c in BP.PIXEL_CANDIDATES]
+        own = [j.job for j in jobs if j.lamp == "own"]
+        if own:
+            say(f"predict_benchmark: --colours pixels leaves out {len(own)} jobs lit by their own lamps "
+                f"(several kinds: not one lamp times the scene's transfer): {', '.join(own)}")
+            jobs = [j for j in jobs if j.lamp != "own"]
     recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say, out=a.outdir, pbrt=a.pbrt)
-    BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates])
+    BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates],
+                 fit=a.colours != "pixels")
     cands = [*a.candidates, *(f for f in BP.FLOORED if f.split("+")[0] in a.candidates)]
     prs = BP.pairs(recs, cands)
     summ = BP.summary(prs, cands)

@@ -52,6 +52,35 @@ def read_rgb(path: str | Path) -> np.ndarray:
     return rgb
 
 
+def read_spectral(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a spectral film's buckets (OpenEXR's spectral layout: channels ``S0.<nm>nm``, the
+    decimal point written as a comma) as (centres in nm, increasing; a (height, width, B)
+    float64 array of spectral radiance).
+
+    Raises
+    ------
+    ImageError
+        If the file is missing, not an EXR file, or has no spectral channel.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such image file")
+    OpenEXR = _openexr()
+    try:
+        with OpenEXR.File(str(path)) as f:
+            channels = f.channels()
+            named = {}
+            for name, ch in channels.items():
+                if name.startswith("S0.") and name.endswith("nm"):
+                    named[float(name[3:-2].replace(",", "."))] = np.asarray(ch.pixels, dtype=np.float64)
+    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
+        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+    if not named:
+        raise ImageError(f"{path}: no spectral channels S0.<nm>nm (a \"spectral\" film writes them)")
+    centres = np.array(sorted(named))
+    return centres, np.stack([named[c] for c in centres], axis=-1)
+
+
 def read_header(path: str | Path) -> dict:
     """Read the header attributes of an EXR file, by name.
 

@@ -244,6 +244,102 @@ def covariance_de2(pc: PathColours, spp: int, pixel_sampler: str = "sobol", metr
     return total
 
 
+def hat_basis(centres, lo: float, hi: float):
+    """The piecewise-linear functions of a spectrum known at ``centres`` (a spectral film's
+    bucket centres inside [lo, hi]), as a reflectance set: function b is 1 at centre b, 0 at the
+    others, linear between them and constant beyond the outer centres. Any spectrum
+    T(λ) = sum_b t_b φ_b(λ) then has path colours sum_b t_b C_b(u), linear in t, so one
+    tabulation of C_b serves every pixel of an image (:func:`pixel_de2`)."""
+    from wavelength_pdf.reflectances import ReflectanceSet
+
+    c = np.asarray(centres, dtype=np.float64)
+    if c.ndim != 1 or c.size < 2 or not np.all(np.diff(c) > 0) or c[0] <= lo or c[-1] >= hi:
+        raise ValueError(f"centres must increase strictly inside ({lo:g}, {hi:g}) nm, got {c}")
+    wl = np.concatenate([[lo], c, [hi]])
+    vals = np.zeros((c.size, wl.size))
+    vals[:, 1:-1] = np.eye(c.size)
+    vals[0, 0] = vals[-1, -1] = 1.0
+    return ReflectanceSet("pixels", f"hat functions at {c.size} centres", wl, vals,
+                          tuple(f"{x:g}nm" for x in c), np.full(c.size, 1.0 / c.size))
+
+
+def basis_covariance(pc: PathColours, spp: int, pixel_sampler: str = "sobol") -> np.ndarray:
+    """The cross-covariances M (B, 3, B, 3) of the basis' path colours over a pixel's mean of
+    ``spp`` samples: per stratum summed over spp^2 (``sobol``), or the whole over spp
+    (``independent``), as :func:`mean_covariance` for one colour."""
+    B, U, _ = pc.C.shape
+    _check(spp, pixel_sampler, U)
+    if pixel_sampler == "independent":
+        X = (pc.C - pc.C.mean(axis=1, keepdims=True)).transpose(1, 0, 2).reshape(U, B * 3)
+        M = X.T @ X / U / spp
+    else:
+        S = pc.C.reshape(B, spp, U // spp, 3)
+        X = (S - S.mean(axis=2, keepdims=True)).transpose(1, 2, 0, 3).reshape(U, B * 3)
+        M = X.T @ X / (U // spp) / spp ** 2
+    return M.reshape(B, 3, B, 3)
+
+
+def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "sobol",
+              metric: str = "de2000", incoherence: np.ndarray | None = None) -> np.ndarray:
+    """Per pixel, the linearised squared error of its mean of ``spp`` samples (the
+    ``covariance`` candidate) for pixels whose spectrum is T_p = sum_b t[p, b] φ_b: ``pc`` is
+    the table's path colours for the basis of :func:`hat_basis` (K = B). A pixel's colour is
+    t_p · target, its estimate t_p · C(u), so the mean's covariance is the quadratic form
+    t_p' M t_p of the basis' cross-covariances (:func:`basis_covariance`), formed once.
+
+    ``incoherence`` (P,): each pixel's relative variance r_p of its paths' magnitude from one
+    sample to the next (0: every sample of the pixel sees the same path spectrum, as a directly
+    lit patch does). A sample's estimate is a·C(u) with a independent of u, and the variance
+    of the mean of N is E[a]^2 (Cov_strat + r Cov_u(C) / N) + Var(a) c c' / N: the last term is
+    the path noise (the benchmark's floor), the middle one the wavelength noise that the
+    pixel's stratification of u cannot remove (with independent u, (1 + r) Cov_u(C) / N).
+
+    Units: a white surface lit by the lamp has Y = 1, Lab relative to D65 at Y = 1 (the
+    benchmark's image units, when t is scaled so: :mod:`.evaluation.benchmark.transfer`).
+
+    Returns
+    -------
+    (P,) array
+        Each pixel's expected squared CIEDE2000 (``metric='lab'``: Lab distance).
+    """
+    import colour
+
+    B = pc.C.shape[0]
+    t = np.atleast_2d(np.asarray(t, dtype=np.float64))
+    if t.shape[1] != B:
+        raise ValueError(f"t has {t.shape[1]} coefficients per pixel, the basis {B}")
+
+    def quad(M):
+        return np.einsum("pb,bicj,pc->pij", t, M, t, optimize=True)
+
+    cov = quad(basis_covariance(pc, spp, pixel_sampler))
+    if incoherence is not None:
+        r = np.asarray(incoherence, dtype=np.float64)
+        if r.shape != (t.shape[0],) or np.any(~np.isfinite(r)) or np.any(r < 0):
+            raise ValueError(f"incoherence must be {t.shape[0]} finite values >= 0")
+        cov = cov + r[:, None, None] * quad(basis_covariance(pc, spp, "independent"))
+    xyz = t @ pc.target
+    white = _white_xy()
+    h = 1e-6 * np.maximum(np.abs(xyz).max(axis=1, keepdims=True), 1e-12)
+    jac = np.stack([(colour.XYZ_to_Lab(xyz + h * e, white) - colour.XYZ_to_Lab(xyz - h * e, white)) / (2 * h)
+                    for e in np.eye(3)], axis=-1)  # (P, 3 Lab, 3 XYZ)
+    cov_lab = jac @ cov @ np.swapaxes(jac, 1, 2)
+    s, V = np.linalg.eigh(0.5 * (cov_lab + np.swapaxes(cov_lab, 1, 2)))
+    s = np.clip(s, 0.0, None)
+    if metric == "lab":
+        return s.sum(axis=1)
+    if metric != "de2000":
+        raise ValueError(f"metric must be 'de2000' or 'lab', not {metric!r}")
+    lab_c = np.asarray(colour.XYZ_to_Lab(xyz, white))
+    eps = 1e-4  # as expected_quadratic: small against any colour difference
+    total = np.zeros(t.shape[0])
+    for i in range(3):
+        v = V[:, :, i]
+        q = 0.5 * sum(delta_e2000(lab_c + sgn * eps * v, lab_c) ** 2 for sgn in (1.0, -1.0)) / eps ** 2
+        total += s[:, i] * q
+    return total
+
+
 def j_squared(pc: PathColours, spp: int, pixel_sampler: str = "sobol") -> float:
     """Candidate (a): J^2, today's objective (design §4.1) in squared-error units; the same
     for every spp and pixel sampler (J does not know them)."""

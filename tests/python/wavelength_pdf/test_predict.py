@@ -1,6 +1,8 @@
 """The predictions of a table's pixel error (wavelength_pdf.predict)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -137,3 +139,54 @@ def test_unknown_candidate_and_bad_spp(fl2):
     pc = P.path_colours(table, fl2, points=96)
     with pytest.raises(ValueError, match="divide"):
         P.stratified_de2(pc, 64, "sobol")
+
+
+@pytest.mark.parametrize("ps", ["sobol", "independent"])
+def test_pixel_prediction_is_the_colours_own(fl2, ps):
+    """A pixel whose spectrum is sum_b t_b φ_b (the hat basis) is predicted exactly as a
+    surface of that reflectance under the lamp (K = 1): the basis' path colours combine
+    linearly. Coefficients all 1 are the white surface (the hats sum to 1), and the pixels
+    are independent of one another (a stack of them gives each its own value)."""
+    lo, hi = 380.0, 780.0
+    centres = np.arange(390.0, 780.0, 20.0)
+    basis = P.hat_basis(centres, lo, hi)
+    np.testing.assert_allclose(basis.values.sum(axis=0), 1.0)
+    table = stratified.stratified_table(fl2, "spd", lo, hi)
+    pcb = P.path_colours(table, fl2, basis, points=2 ** 12)
+    t_col = 0.1 + 0.8 * np.abs(np.sin(centres / 37.0))
+    # The surface whose reflectance is the hats' combination, as a one-colour set.
+    surface = replace(basis, name="one", values=(t_col @ basis.values)[None], labels=("one",),
+                      weights=np.ones(1))
+    want = [P.covariance_de2(P.path_colours(table, fl2, None, points=2 ** 12), 64, ps),
+            P.covariance_de2(P.path_colours(table, fl2, surface, points=2 ** 12), 64, ps)]
+    got = P.pixel_de2(pcb, np.stack([np.ones(centres.size), t_col, 0.5 * t_col]), 64, ps)
+    np.testing.assert_allclose(got[:2], want, rtol=1e-6)
+    # Half as bright: darker in Lab, so a different but finite and positive error.
+    assert np.isfinite(got[2]) and 0 < got[2] != got[1]
+    with pytest.raises(ValueError, match="coefficients"):
+        P.pixel_de2(pcb, np.ones((2, 3)), 64, ps)
+
+
+def test_hat_basis_refuses_centres_outside_the_range():
+    with pytest.raises(ValueError, match="centres"):
+        P.hat_basis([370.0, 500.0], 380.0, 780.0)
+    with pytest.raises(ValueError, match="centres"):
+        P.hat_basis([500.0, 450.0], 380.0, 780.0)
+
+
+def test_incoherent_paths_add_the_unstratified_wavelength_noise(fl2):
+    """With incoherence r (the paths' magnitude varying from sample to sample), a stratified
+    pixel's covariance is Cov_strat + r Cov_indep (pixel_de2's derivation); measured in Lab,
+    which is linear in the covariance, the prediction is exactly that sum, per pixel."""
+    centres = np.arange(390.0, 780.0, 20.0)
+    table = stratified.stratified_table(fl2, "xyz", 380.0, 780.0)
+    pcb = P.path_colours(table, fl2, P.hat_basis(centres, 380.0, 780.0), points=2 ** 12)
+    t = np.stack([np.ones(centres.size), 0.2 + 0.6 * (centres > 550.0)])
+    r = np.array([0.5, 3.0])
+    strat = P.pixel_de2(pcb, t, 16, "sobol", "lab")
+    indep = P.pixel_de2(pcb, t, 16, "independent", "lab")
+    np.testing.assert_allclose(P.pixel_de2(pcb, t, 16, "sobol", "lab", incoherence=r), strat + r * indep,
+                               rtol=1e-9)
+    assert np.all(indep > 10 * strat)  # stratifying u is what a coherent pixel gains
+    with pytest.raises(ValueError, match="incoherence"):
+        P.pixel_de2(pcb, t, 16, incoherence=np.array([1.0, -1.0]))

@@ -121,9 +121,15 @@ def spectrum_of(j: JobInputs):
 
 
 #: What the lamp lights in the predictions: a white surface; on the ColorChecker jobs its 24
-#: patches (white elsewhere); or every job's own scene colours (``pbrt --material-reflectances``
-#: on the job's scene copy, design §5.6; white where the scene has no diffuse colours).
-COLOURS = ("white", "colorchecker", "scene")
+#: patches (white elsewhere); every job's own scene colours (``pbrt --material-reflectances``
+#: on the job's scene copy, design §5.6; white where the scene has no diffuse colours); or
+#: every lit pixel of the job's image, each with its own spectrum from one render of the scene
+#: under a flat lamp (``pixels``, :mod:`.transfer`: colours, light paths and exposure as the
+#: image has them, in the image's units).
+COLOURS = ("white", "colorchecker", "scene", "pixels")
+#: The candidates that ``pixels`` computes (the linearised ones: exact per pixel from one
+#: tabulation, where the Monte Carlo and J would need one per pixel).
+PIXEL_CANDIDATES = ("covariance", "covariance-lab")
 
 
 def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Sequence[int] = (16, 64),
@@ -141,8 +147,11 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
 
     if colours not in COLOURS:
         raise ValueError(f"colours must be one of {COLOURS}, not {colours!r}")
-    if colours == "scene" and out is None:
-        raise ValueError("colours 'scene' needs the benchmark's folder (out)")
+    if colours in ("scene", "pixels") and out is None:
+        raise ValueError(f"colours {colours!r} needs the benchmark's folder (out)")
+    if colours == "pixels" and set(candidates) - set(PIXEL_CANDIDATES):
+        raise ValueError(f"colours 'pixels' computes only {', '.join(PIXEL_CANDIDATES)}, not "
+                         f"{', '.join(sorted(set(candidates) - set(PIXEL_CANDIDATES)))}")
     meas = {(r["job"], r["row"], r["spp"]): r for r in results}
     cache: dict[tuple, object] = {}
     spectra: dict[str, object] = {}
@@ -162,6 +171,9 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
             use_refl = by_scene[j.scene]
         if j.spectrum not in spectra:
             spectra[j.spectrum] = spectrum_of(j)
+        if colours == "pixels":
+            recs += _pixel_records(j, meas, spps, candidates, by_scene, cache, spectra[j.spectrum], out, pbrt)
+            continue
         for row, path in j.tables.items():
             key = (str(path), j.spectrum, j.scene if colours == "scene" else colours_label(use_refl))
             if key not in cache:
@@ -180,6 +192,38 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
     return recs
 
 
+def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, cache: dict, spectrum,
+                   out: Path, pbrt: Path | None) -> list[dict]:
+    """``predict_jobs``' records of one job with ``colours='pixels'``: each prediction is the
+    mean over the image's lit pixels of that pixel's own (:func:`wavelength_pdf.predict.pixel_de2`)."""
+    from wavelength_pdf import predict as P
+    from wavelength_pdf.evaluation.benchmark import transfer
+    from wavelength_pdf.table import read_table
+
+    if j.scene not in by_scene:
+        by_scene[j.scene] = transfer.of_scene(j.scene, out, pbrt=pbrt)
+    tr = by_scene[j.scene]
+    basis = P.hat_basis(tr.centres, LO, HI)
+    recs = []
+    for row, path in j.tables.items():
+        key = (str(path), j.spectrum, "pixels", tuple(tr.centres))
+        if key not in cache:
+            cache[key] = P.path_colours(read_table(path), spectrum, basis)
+        for spp in spps:
+            m = meas.get((j.job, row, spp))
+            if m is None:
+                continue
+            rec = {"job": j.job, "regime": regime(j.scene), "scene": j.scene, "lamp": j.lamp,
+                   "pixel_sampler": j.pixel_sampler, "spp": spp, "row": row, "de2": m["de2"],
+                   "floor": floor_of(meas, j.job, spp)}
+            for c in candidates:
+                metric = "lab" if c == "covariance-lab" else "de2000"
+                rec[c] = float(np.mean(P.pixel_de2(cache[key], tr.t, spp, j.pixel_sampler, metric,
+                                                   incoherence=tr.incoherence)))
+            recs.append(rec)
+    return recs
+
+
 def floor_of(meas: dict, job: str, spp: int) -> float:
     """The job's measured floor (de2 of the ``floor`` row) at spp; where it was rendered only
     at fewer spp (the lamp sweep: 16), scaled by their ratio (path noise of independent
@@ -192,9 +236,17 @@ def floor_of(meas: dict, job: str, spp: int) -> float:
     return meas[(job, G.FLOOR, lower[-1])]["de2"] * lower[-1] / spp if lower else float("nan")
 
 
-def add_floor(records: list[dict], bases: Sequence[str] = ("stratified", "stratified-de", "covariance")) -> None:
+def add_floor(records: list[dict], bases: Sequence[str] = ("stratified", "stratified-de", "covariance"),
+              fit: bool = True) -> None:
     """The ``+floor`` variants: s * prediction + floor, s fitted leaving the job out (module
-    docstring)."""
+    docstring); ``fit=False``: s = 1, for predictions already in the image's units
+    (``colours='pixels'``)."""
+    if not fit:
+        for base in bases:
+            for r in records:
+                if base in r:
+                    r[f"{base}+floor"] = r[base] + r["floor"]
+        return
     def groups(r):
         return (r["scene"], r["pixel_sampler"], r["spp"]), (r["regime"], r["pixel_sampler"], r["spp"])
 

@@ -132,3 +132,42 @@ def test_script_names_missing_tables(tmp_path, capsys):
     code = _script().main(["-o", str(out), "--shared", str(tmp_path / "shared"), "--docs", str(tmp_path / "docs"),
                            "--quiet"])
     assert code == 2 and "optimized table" in capsys.readouterr().err
+
+
+def test_pixel_colours_come_from_one_render_of_the_scene(tmp_path, pbrt):
+    """--colours pixels: one render of the scene under a flat lamp with a spectral film gives
+    every lit pixel's spectrum. Its buckets and its RGB, two independent paths through the
+    renderer's film, give the same luminance (the scale that puts the buckets in the image's
+    units is 1 within 2 %); the copy of the spd table predicts exactly the spd table's error,
+    uniform sampling more; only the linearised candidates are offered."""
+    from wavelength_pdf.evaluation.benchmark import transfer
+
+    out, results = _bench(tmp_path)
+    tr = transfer.of_scene("colorchecker", out, pbrt=pbrt, spp=64)
+    assert tr.scale == pytest.approx(1.0, rel=0.02)
+    assert tr.t.shape == (int(tr.mask.sum()), transfer.BUCKETS) and np.all(tr.t >= 0)
+    assert np.all(np.isfinite(tr.incoherence)) and np.all(tr.incoherence >= 0)
+    jobs, _ = BP.plan(results, out, tmp_path / "no-shared")
+    recs = BP.predict_jobs(results, jobs, (16,), BP.PIXEL_CANDIDATES, "pixels", out=out, pbrt=pbrt)
+    prs = {p["row"]: p for p in BP.pairs(recs, BP.PIXEL_CANDIDATES)}
+    for c in BP.PIXEL_CANDIDATES:
+        assert prs["spd"][c] == 1.0 and prs["uniform"][c] > 1.0, c
+    with pytest.raises(ValueError, match="only covariance"):
+        BP.predict_jobs(results, jobs, (16,), ("J",), "pixels", out=out, pbrt=pbrt)
+
+
+def test_a_scene_lit_by_its_own_lamps_has_no_transfer(tmp_path):
+    from wavelength_pdf.evaluation.benchmark import transfer
+
+    with pytest.raises(ValueError, match="own lamps"):
+        transfer.write_scene("night-street", tmp_path)
+
+
+def test_an_rgb_image_has_no_spectral_buckets(tmp_path):
+    from wavelength_pdf.exr import ImageError, read_spectral, write_rgb
+
+    write_rgb(tmp_path / "rgb.exr", np.ones((2, 3, 3)))
+    with pytest.raises(ImageError, match="no spectral channels"):
+        read_spectral(tmp_path / "rgb.exr")
+    with pytest.raises(ImageError, match="no such image"):
+        read_spectral(tmp_path / "missing.exr")

@@ -1,0 +1,161 @@
+"""Each pixel's spectrum under any lamp, from one render of the scene (design §6.7).
+
+A scene lit by one lamp (every emitter given the lamp's spectrum, normalized by pbrt-v4 to the
+same luminance whatever its shape) sends to pixel p the radiance E(λ) G_p(λ) / Y(E): G_p is
+what the scene's light paths do to the light (reflection, filtering, dispersion, exposure) and
+does not depend on the lamp. One render under a flat lamp with a spectral film gives G_p at the
+film's bucket centres; with G_p linear between them (:func:`wavelength_pdf.predict.hat_basis`),
+the pixel's colour and the noise of its estimate are known for every lamp and table without
+rendering again (:func:`wavelength_pdf.predict.pixel_de2`). This is what the prediction of the
+image (``predict_benchmark.py --colours pixels``) uses instead of a white surface.
+
+Units: the coefficients are scaled so that t_p · (the basis' colours under a lamp) is the
+pixel's XYZ in the image's own units (Lab relative to D65 at Y = 1, as the benchmark's
+measures): one scale per scene, the ratio of the render's own luminance (its RGB) to the
+buckets' (sums over the lit pixels), which absorbs the film's sensor, exposure and pbrt-v4's
+normalization of spectra. Scenes with their own lamps of several kinds are not separable so
+(their pixel spectra are sums of differently shaped lamps) and are refused.
+"""
+from __future__ import annotations
+
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wavelength_pdf.evaluation.benchmark import grid as G
+from wavelength_pdf.spectra import Spectrum
+
+#: The spectral film's buckets over the benchmark's range (20 nm each): surface colours and
+#: filters are smooth at that scale; the lamp's own lines come from its spectrum, not the film.
+BUCKETS = 20
+#: Samples per pixel of the transfer render (one per scene).
+SPP = 1024
+#: Samples per pixel of each of the two renders that measure a pixel's incoherence (the
+#: relative variance of its paths' magnitude from one sample to the next), and their
+#: wavelengths per path (``--wavelength-repeats``: so that the flat lamp's own wavelength
+#: noise does not count as the paths').
+INCOHERENCE_SPP = 64
+INCOHERENCE_REPEATS = 8
+LO, HI = 380.0, 780.0
+
+FLAT = Spectrum("flat", "equal energy", np.array([LO, HI]), np.array([1.0, 1.0]))
+
+
+@dataclass(frozen=True)
+class Transfer:
+    """A scene's pixels as coefficients of the hat basis (lit pixels only)."""
+
+    #: Bucket centres, nm (B,).
+    centres: np.ndarray
+    #: (P, B): pixel p's spectrum under the flat lamp at the centres, in image units.
+    t: np.ndarray
+    #: (h, w) mask of the pixels in ``t`` (``measures.lit_pixels`` of the flat render).
+    mask: np.ndarray
+    #: The luminance scale applied (render RGB / buckets).
+    scale: float
+    #: (P,): each pixel's incoherence r_p (:func:`wavelength_pdf.predict.pixel_de2`), from a
+    #: seed pair of renders at n spp: n (Y_1 - Y_2)^2 / 2 over the pixel's Y^2 (unbiased per
+    #: pixel, noisy; only means over many pixels are meant).
+    incoherence: np.ndarray
+
+
+def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float) -> str:
+    """``text`` with its Film statement made a spectral film of ``buckets`` over [lo, hi]."""
+    from wavelength_pdf.pbrt_syntax import split_params, statements, tokenize
+
+    films = [split_params(st, 1) for st in statements(tokenize(text, path)) if st.directive.text == "Film"]
+    if len(films) != 1:
+        raise ValueError(f"{path}: needs exactly one Film statement (found {len(films)})")
+    arg = films[0].args[0]
+    new = (f'"spectral" "integer nbuckets" [ {buckets} ] "float lambdamin" [ {lo:g} ] '
+           f'"float lambdamax" [ {hi:g} ]')
+    return text[:arg.start] + new + text[arg.end:]
+
+
+def write_scene(scene: str, out: Path, shared: Path = G.SHARED, buckets: int = BUCKETS) -> Path:
+    """The scene's copy under a flat lamp with a spectral film, at the benchmark's size, at
+    ``out/transfer/SCENE/scene.pbrt``."""
+    from wavelength_pdf.evaluation.scene_edit import edit_scene
+
+    spec = G.SCENES[scene]
+    if spec.own_lamps:
+        raise ValueError(f"{scene}: lit by its own lamps of several kinds, whose pixel spectra are not "
+                         "one lamp times the scene's transfer")
+    folder = Path(out) / "transfer" / scene
+    source = spec.path(shared)
+    if spec.water:
+        from wavelength_pdf.evaluation.glass_of_water import with_water
+
+        source = with_water(source, folder / "with-water" / "scene.pbrt")
+    draft = edit_scene(source, FLAT, folder / "draft.pbrt", lo=LO, hi=HI, resolution=spec.resolution,
+                       pixel_sampler="sobol")
+    text = _spectral_film(draft.read_text(), draft, buckets, LO, HI)
+    draft.unlink()
+    path = folder / "scene.pbrt"
+    if not path.is_file() or path.read_text() != text:  # unchanged: its renders stay valid
+        path.write_text(text)
+    return path
+
+
+def render(scene_file: Path, pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None,
+           seed: int = 0, repeats: int = 1, name: str = "transfer.exr") -> Path:
+    """Render the transfer scene (once: an image already there is kept) to ``name`` beside
+    it."""
+    from wavelength_pdf.renderer import find_pbrt
+
+    exr = scene_file.with_name(name)
+    if exr.is_file() and exr.stat().st_mtime >= scene_file.stat().st_mtime:
+        return exr
+    tmp = exr.with_name(exr.stem + ".tmp.exr")
+    cmd = [str(find_pbrt(pbrt)), "--quiet", "--spp", str(spp), "--seed", str(seed), "--outfile", str(tmp),
+           *(["--wavelength-repeats", str(repeats)] if repeats > 1 else []),
+           *(["--nthreads", str(nthreads)] if nthreads else []), str(scene_file)]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode != 0 or not tmp.is_file():
+        tmp.unlink(missing_ok=True)
+        raise RuntimeError(f"{' '.join(cmd)} failed (exit {done.returncode}):\n{done.stderr.strip()}")
+    tmp.replace(exr)
+    return exr
+
+
+def load(exr: Path, pair: tuple[Path, Path] | None = None, pair_spp: int = INCOHERENCE_SPP) -> Transfer:
+    """The transfer of a rendered scene (:func:`render`), scaled to the image's units, with
+    each pixel's incoherence from a seed ``pair`` of renders at ``pair_spp`` (None: 0)."""
+    from wavelength_pdf import predict as P
+    from wavelength_pdf.evaluation.benchmark.measures import lit_pixels
+    from wavelength_pdf.evaluation.metrics import rgb_to_xyz
+    from wavelength_pdf.exr import read_rgb, read_spectral
+
+    centres, buckets = read_spectral(exr)
+    rgb = read_rgb(exr)
+    mask = lit_pixels(rgb)
+    t = np.clip(buckets[mask], 0.0, None)
+    flat = P.path_colours(_uniform_table(), FLAT, P.hat_basis(centres, LO, HI), points=2 ** 10)
+    y_buckets = float(np.sum(t @ flat.target[:, 1]))
+    y_rgb = float(np.sum(rgb_to_xyz(rgb[mask])[:, 1]))
+    if not (y_buckets > 0 and y_rgb > 0):
+        raise ValueError(f"{exr}: no light in the lit pixels (luminance {y_rgb:g}, buckets {y_buckets:g})")
+    scale = y_rgb / y_buckets
+    r = np.zeros(t.shape[0])
+    if pair is not None:
+        y = rgb_to_xyz(rgb[mask])[:, 1]
+        y1, y2 = (rgb_to_xyz(read_rgb(p)[mask])[:, 1] for p in pair)
+        r = np.where(y > 0, pair_spp * (y1 - y2) ** 2 / 2.0 / np.maximum(y, 1e-300) ** 2, 0.0)
+    return Transfer(centres, t * scale, mask, scale, r)
+
+
+def _uniform_table():
+    from wavelength_pdf.stratified import uniform_table
+
+    return uniform_table(LO, HI)
+
+
+def of_scene(scene: str, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None, spp: int = SPP,
+             nthreads: int | None = None) -> Transfer:
+    """Write, render (once) and load the transfer of a benchmark scene, with its incoherence."""
+    scene_file = write_scene(scene, out, shared)
+    pair = tuple(render(scene_file, pbrt, INCOHERENCE_SPP, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
+                        name=f"incoherence-seed{seed}.exr") for seed in (1, 2))
+    return load(render(scene_file, pbrt, spp, nthreads), pair)
