@@ -81,6 +81,31 @@ def read_spectral(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return centres, np.stack([named[c] for c in centres], axis=-1)
 
 
+def read_channel(path: str | Path, name: str) -> np.ndarray:
+    """Read one named channel of an EXR file as a (height, width) float64 array (e.g. a
+    spectral film's ``wavelengths.terminated``).
+
+    Raises
+    ------
+    ImageError
+        If the file is missing, not an EXR file, or has no such channel.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such image file")
+    OpenEXR = _openexr()
+    try:
+        with OpenEXR.File(str(path)) as f:
+            channels = f.channels()
+            if name not in channels:
+                raise ImageError(f"{path}: no channel {name!r} (has {sorted(channels)[:8]}...)")
+            return np.asarray(channels[name].pixels, dtype=np.float64)
+    except ImageError:
+        raise
+    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
+        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+
+
 def read_header(path: str | Path) -> dict:
     """Read the header attributes of an EXR file, by name.
 

@@ -279,8 +279,79 @@ def basis_covariance(pc: PathColours, spp: int, pixel_sampler: str = "sobol") ->
     return M.reshape(B, 3, B, 3)
 
 
+def basis_path_colours(table, spectrum, basis, points: int = U_POINTS) -> PathColours:
+    """:func:`path_colours` for the hat basis of :func:`hat_basis`, where a function on which
+    the lamp emits nothing (a line lamp's empty bands) has C_b(u) = 0 and colour 0 exactly,
+    instead of being refused as a surface that reflects nothing of the lamp (the objective's
+    rule for surface colours, design §4.5). The weights are the basis'; J is that of the
+    functions the lamp lights."""
+    from dataclasses import replace
+
+    from wavelength_pdf.colorimetry import cmfs
+
+    lo, hi = float(table.grid[0]), float(table.grid[-1])
+    cwl, cval = cmfs()
+    swl = np.asarray(spectrum.wavelengths, dtype=np.float64)
+    lam = np.unique(np.concatenate([np.linspace(lo, hi, 4001), swl[(swl > lo) & (swl < hi)]]))
+    E = np.interp(lam, swl, np.asarray(spectrum.values, dtype=np.float64), left=0.0, right=0.0)
+    ybar = np.interp(lam, cwl, cval[:, 1], left=0.0, right=0.0)
+    phi = np.stack([np.interp(lam, basis.wavelengths, v) for v in np.asarray(basis.values, dtype=np.float64)])
+    lit = np.flatnonzero(np.trapezoid(phi * (E * ybar)[None, :], lam, axis=1) > 0)
+    if lit.size == phi.shape[0]:
+        return path_colours(table, spectrum, basis, points)
+    if lit.size == 0:
+        raise ValueError(f"{spectrum.name}: no luminance in {lo:g}-{hi:g} nm")
+    sub = replace(basis, values=np.asarray(basis.values)[lit], labels=tuple(basis.labels[i] for i in lit),
+                  weights=np.full(lit.size, 1.0 / lit.size))
+    pc = path_colours(table, spectrum, sub, points)
+    C = np.zeros((phi.shape[0],) + pc.C.shape[1:])
+    target = np.zeros((phi.shape[0], 3))
+    C[lit], target[lit] = pc.C, pc.target
+    return PathColours(C, target, np.asarray(basis.weights, dtype=np.float64), pc.J)
+
+
+def one_wavelength_covariance(table, spectrum, basis, step: float = 0.05) -> np.ndarray:
+    """The covariance (B, 3, B, 3) of one path's estimate for the hat basis when the path kept
+    one of its four wavelengths (a dispersive surface: design §1, the renderer's
+    ``TerminateSecondary``): that wavelength is a draw from the table's mixture
+    q = (1/4) sum_k p_k, weighted 1 / q, so the estimate for basis function b is
+    g_b(λ) = φ_b(λ) E(λ) cmf(λ) / (q(λ) Y_w) and its covariance ∫ q g_b g_c' dλ − c_b c_c'
+    (Y_w = ∫ E ȳ: the white surface has Y = 1, as :func:`path_colours`). A trapezoid rule on
+    a ``step`` nm grid joined with the lamp's, the table's and the basis' nodes (the lamp's
+    narrow lines are resolved by their own nodes)."""
+    from wavelength_pdf.colorimetry import cmfs
+
+    lo, hi = float(table.grid[0]), float(table.grid[-1])
+    swl = np.asarray(spectrum.wavelengths, dtype=np.float64)
+    bwl = np.asarray(basis.wavelengths, dtype=np.float64)
+    lam = np.unique(np.concatenate([np.arange(lo, hi, step), [hi], swl, np.asarray(table.grid, np.float64), bwl]))
+    lam = lam[(lam >= lo) & (lam <= hi)]
+    E = np.interp(lam, swl, np.asarray(spectrum.values, dtype=np.float64), left=0.0, right=0.0)
+    q = np.mean([np.interp(lam, table.grid, p) for p in np.asarray(table.pdfs, dtype=np.float64)], axis=0)
+    cwl, cval = cmfs()
+    cmf = np.stack([np.interp(lam, cwl, cval[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
+    phi = np.stack([np.interp(lam, bwl, v) for v in np.asarray(basis.values, dtype=np.float64)])
+    w = np.zeros_like(lam)  # trapezoid weights
+    w[1:] += 0.5 * np.diff(lam)
+    w[:-1] += 0.5 * np.diff(lam)
+    yw = float(np.sum(w * E * cmf[:, 1]))
+    if not yw > 0:
+        raise ValueError(f"{spectrum.name}: no luminance in {lo:g}-{hi:g} nm")
+    emits = E > 0
+    if np.any(emits & ~(q > 0)):
+        raise ValueError(f"the table does not cover {spectrum.name}: q = 0 where the lamp emits")
+    f = np.where(emits, E / np.where(q > 0, q, 1.0), 0.0) / yw  # (L,)
+    # g_b,i(λ) = φ_b(λ) cmf_i(λ) E / (q Y_w); second moment ∫ q g g' = Σ w q g g'.
+    G = (phi[:, None, :] * cmf.T[None, :, :] * f[None, None, :]).reshape(-1, lam.size)  # (B*3, L)
+    second = (G * (w * q)[None, :]) @ G.T
+    mean = (G * (w * q)[None, :]).sum(axis=1)
+    B = phi.shape[0]
+    return (second - np.outer(mean, mean)).reshape(B, 3, B, 3)
+
+
 def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "sobol",
-              metric: str = "de2000", incoherence: np.ndarray | None = None) -> np.ndarray:
+              metric: str = "de2000", incoherence: np.ndarray | None = None,
+              terminated: np.ndarray | None = None, one_wavelength: np.ndarray | None = None) -> np.ndarray:
     """Per pixel, the linearised squared error of its mean of ``spp`` samples (the
     ``covariance`` candidate) for pixels whose spectrum is T_p = sum_b t[p, b] φ_b: ``pc`` is
     the table's path colours for the basis of :func:`hat_basis` (K = B). A pixel's colour is
@@ -293,6 +364,14 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     of the mean of N is E[a]^2 (Cov_strat + r Cov_u(C) / N) + Var(a) c c' / N: the last term is
     the path noise (the benchmark's floor), the middle one the wavelength noise that the
     pixel's stratification of u cannot remove (with independent u, (1 + r) Cov_u(C) / N).
+    r is capped at N (the linearisation's limit: below).
+
+    ``terminated`` (P,): the share of each pixel's light carried by paths that kept one
+    wavelength (a dispersive surface), with ``one_wavelength`` the basis' covariance of such a
+    path (:func:`one_wavelength_covariance`). Those paths' share s of the colour is estimated
+    from independent draws of the mixture, the rest as above: the covariance is
+    (1 − s)² (stratified part) + s² (1 + r) one_wavelength / N (the two parts taken as
+    independent).
 
     Units: a white surface lit by the lamp has Y = 1, Lab relative to D65 at Y = 1 (the
     benchmark's image units, when t is scaled so: :mod:`.evaluation.benchmark.transfer`).
@@ -312,12 +391,24 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     def quad(M):
         return np.einsum("pb,bicj,pc->pij", t, M, t, optimize=True)
 
+    def per_pixel(name, v, hi=np.inf):
+        v = np.asarray(v, dtype=np.float64)
+        if v.shape != (t.shape[0],) or np.any(~np.isfinite(v)) or np.any(v < 0) or np.any(v > hi):
+            raise ValueError(f"{name} must be {t.shape[0]} finite values in [0, {hi:g}]")
+        return v[:, None, None]
+
     cov = quad(basis_covariance(pc, spp, pixel_sampler))
+    # Capped at N: beyond it the mean of N samples is ruled by paths rarer than one in N, its
+    # relative variance r / N exceeds 1, and Lab's cube root no longer follows the linearised
+    # error (which would grow with r without bound while the CIEDE2000 of such pixels does not).
+    r = np.minimum(per_pixel("incoherence", incoherence), spp) if incoherence is not None else 0.0
     if incoherence is not None:
-        r = np.asarray(incoherence, dtype=np.float64)
-        if r.shape != (t.shape[0],) or np.any(~np.isfinite(r)) or np.any(r < 0):
-            raise ValueError(f"incoherence must be {t.shape[0]} finite values >= 0")
-        cov = cov + r[:, None, None] * quad(basis_covariance(pc, spp, "independent"))
+        cov = cov + r * quad(basis_covariance(pc, spp, "independent"))
+    if terminated is not None:
+        if one_wavelength is None or np.shape(one_wavelength) != (B, 3, B, 3):
+            raise ValueError(f"terminated needs one_wavelength, the basis' ({B}, 3, {B}, 3) covariance")
+        share = per_pixel("terminated", terminated, 1.0)
+        cov = (1.0 - share) ** 2 * cov + share ** 2 * (1.0 + r) * quad(np.asarray(one_wavelength)) / spp
     xyz = t @ pc.target
     white = _white_xy()
     h = 1e-6 * np.maximum(np.abs(xyz).max(axis=1, keepdims=True), 1e-12)

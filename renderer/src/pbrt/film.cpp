@@ -156,10 +156,17 @@ FilmSettings FilmSettings::Create(const std::string &type, const ParameterDictio
 
 RGBFilm::RGBFilm(const FilmSettings &s, Float exposureTime)
     : settings(s), sensor(s.colorSpace, exposureTime * s.iso / 100),
-      pixels(size_t(s.pixelBounds.Area())), buckets(size_t(s.pixelBounds.Area()) * size_t(s.nBuckets)) {}
+      pixels(size_t(s.pixelBounds.Area())), buckets(size_t(s.pixelBounds.Area()) * size_t(s.nBuckets)),
+      luminance(s.nBuckets > 0 ? size_t(s.pixelBounds.Area()) : 0) {}
 
 void RGBFilm::AddSpectralSample(Point2i pPixel, const SampledSpectrum &L, const SampledWavelengths &lambda,
                                 Float weight) {
+    const Float y = L.y(lambda);
+    if (std::isfinite(y)) {
+        std::array<double, 2> &lum = luminance[Offset(pPixel)];
+        lum[0] += double(weight) * y;
+        if (lambda.SecondaryTerminated()) lum[1] += double(weight) * y;
+    }
     double *b = buckets.data() + Offset(pPixel) * size_t(settings.nBuckets);
     const double width = double(settings.lambdaMax - settings.lambdaMin) / settings.nBuckets;
     for (int i = 0; i < NSpectrumSamples; ++i) {
@@ -197,7 +204,7 @@ Image RGBFilm::GetImage() const {
     if (!IsSpectral()) return img;
     // Spectral: R, G, B then one channel per bucket, named by its centre as OpenEXR's spectral
     // layout has it ("S0.<nm>nm", the decimal point written as a comma: a point separates layers).
-    const int n = settings.nBuckets, c = 3 + n;
+    const int n = settings.nBuckets, c = 3 + n + 1;
     img.channels = c;
     img.channelNames = {"R", "G", "B"};
     for (int k = 0; k < n; ++k) {
@@ -208,6 +215,7 @@ Image RGBFilm::GetImage() const {
         std::replace(nm.begin(), nm.end(), '.', ',');
         img.channelNames.push_back("S0." + nm + "nm");
     }
+    img.channelNames.push_back("wavelengths.terminated");
     std::vector<float> rgb = std::move(img.pixels);
     img.pixels.assign(pixels.size() * size_t(c), 0.f);
     for (size_t i = 0; i < pixels.size(); ++i) {
@@ -215,6 +223,8 @@ Image RGBFilm::GetImage() const {
         if (pixels[i].weight != 0)
             for (int k = 0; k < n; ++k)
                 img.pixels[i * c + 3 + k] = float(buckets[i * size_t(n) + k] / pixels[i].weight);
+        const std::array<double, 2> &lum = luminance[i];
+        img.pixels[i * c + 3 + n] = lum[0] > 0 ? float(std::min(1.0, std::max(0.0, lum[1] / lum[0]))) : 0.f;
     }
     return img;
 }

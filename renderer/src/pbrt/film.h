@@ -17,6 +17,7 @@
 #include <pbrt/util/image.h>
 #include <pbrt/util/vecmath.h>
 
+#include <array>
 #include <limits>
 #include <memory>
 #include <string>
@@ -76,7 +77,10 @@ class RGBFilm {
     // Spectral films: adds weight times one path's spectral radiance, per bucket the unbiased
     // estimate of its mean over the bucket, (1/n) sum_i [lambda_i in bucket] L_i / pdf_i /
     // width, for any wavelength sampler (pbrt-v4 averages L in buckets, which holds for its
-    // uniform sampling only). The weights are the ones AddSample gets.
+    // uniform sampling only). The weights are the ones AddSample gets. The path's luminance
+    // is summed too, apart for paths that kept one wavelength (a dispersive surface,
+    // SampledWavelengths::TerminateSecondary): their share of the pixel's luminance is the
+    // channel "wavelengths.terminated" (design §6.8).
     void AddSpectralSample(Point2i pPixel, const SampledSpectrum &L, const SampledWavelengths &lambda,
                            Float weight);
     // The final image (width x height of the pixel bounds, 3 channels; spectral films add
@@ -99,6 +103,9 @@ class RGBFilm {
     FilmSensor sensor;
     std::vector<Pixel> pixels;
     std::vector<double> buckets;  // spectral films: nBuckets per pixel, weighted sums
+    // Spectral films: per pixel, the weighted luminance of all paths and of those that kept
+    // one wavelength.
+    std::vector<std::array<double, 2>> luminance;
 };
 
 }  // namespace pbrt

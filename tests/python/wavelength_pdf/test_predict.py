@@ -188,5 +188,56 @@ def test_incoherent_paths_add_the_unstratified_wavelength_noise(fl2):
     np.testing.assert_allclose(P.pixel_de2(pcb, t, 16, "sobol", "lab", incoherence=r), strat + r * indep,
                                rtol=1e-9)
     assert np.all(indep > 10 * strat)  # stratifying u is what a coherent pixel gains
+    # Paths rarer than one in N: the linearisation's limit, r capped at N.
+    np.testing.assert_array_equal(P.pixel_de2(pcb, t, 16, "sobol", "lab", incoherence=np.array([16.0, 1e6])),
+                                  P.pixel_de2(pcb, t, 16, "sobol", "lab", incoherence=np.array([16.0, 16.0])))
     with pytest.raises(ValueError, match="incoherence"):
         P.pixel_de2(pcb, t, 16, incoherence=np.array([1.0, -1.0]))
+
+
+def test_one_wavelength_covariance_against_draws_from_the_mixture(fl2):
+    """A path that kept one wavelength draws it from the table's mixture q and weights it
+    1 / q: the basis' covariance of that estimate, summed over the basis (the white surface),
+    against draws of q by its inverse CDF (each of the four densities with probability 1/4,
+    wavelength_pdf.sampling); and the mean of those draws is the white surface's colour."""
+    from wavelength_pdf import sampling
+    from wavelength_pdf.colorimetry import cmfs
+
+    centres = np.arange(390.0, 780.0, 20.0)
+    basis = P.hat_basis(centres, 380.0, 780.0)
+    table = stratified.stratified_table(fl2, "xyz", 380.0, 780.0)
+    M = P.one_wavelength_covariance(table, fl2, basis)
+    white_cov = M.sum(axis=(0, 2))
+    rng = np.random.default_rng(11)
+    n = 400_000
+    k = rng.integers(0, 4, n)
+    lam = np.empty(n)
+    for j in range(4):
+        sel = k == j
+        lam[sel] = np.asarray(sampling.sample(table.grid, table.pdfs[j], rng.uniform(size=sel.sum())))
+    q = np.mean([np.interp(lam, table.grid, p) for p in table.pdfs], axis=0)
+    cwl, cval = cmfs()
+    cmf = np.stack([np.interp(lam, cwl, cval[:, i]) for i in range(3)], axis=1)
+    E = np.interp(lam, fl2.wavelengths, fl2.values)
+    fine = np.linspace(380.0, 780.0, 400_001)
+    yw = np.trapezoid(np.interp(fine, fl2.wavelengths, fl2.values) * np.interp(fine, cwl, cval[:, 1]), fine)
+    g = cmf * (E / q / yw)[:, None]
+    assert g[:, 1].mean() == pytest.approx(1.0, rel=0.01)
+    np.testing.assert_allclose(np.diag(white_cov), g.var(axis=0), rtol=0.05)
+
+
+def test_hats_a_line_lamp_does_not_light_are_zero_not_refused():
+    """Under a single line most hat functions see no light: the objective would refuse them as
+    black surfaces; the basis' path colours give them C = 0 and colour 0, so a white pixel
+    (all coefficients 1) is still predicted as the white surface."""
+    line = _line(550.0)
+    centres = np.arange(390.0, 780.0, 20.0)
+    basis = P.hat_basis(centres, 380.0, 780.0)
+    table = stratified.stratified_table(line, "spd", 380.0, 780.0)
+    with pytest.raises(ValueError, match="reflects nothing"):
+        P.path_colours(table, line, basis, points=2 ** 12)
+    pcb = P.basis_path_colours(table, line, basis, points=2 ** 12)
+    dark = np.abs(centres - 550.0) >= 40.0
+    assert np.all(pcb.C[dark] == 0) and np.all(pcb.target[dark] == 0) and np.all(pcb.target[~dark, 1] > 0)
+    white = P.covariance_de2(P.path_colours(table, line, None, points=2 ** 12), 16)
+    np.testing.assert_allclose(P.pixel_de2(pcb, np.ones((1, centres.size)), 16), [white], rtol=1e-6, atol=1e-12)

@@ -208,7 +208,10 @@ def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, c
     for row, path in j.tables.items():
         key = (str(path), j.spectrum, "pixels", tuple(tr.centres))
         if key not in cache:
-            cache[key] = P.path_colours(read_table(path), spectrum, basis)
+            table = read_table(path)
+            cache[key] = (P.basis_path_colours(table, spectrum, basis),
+                          P.one_wavelength_covariance(table, spectrum, basis))
+        pc, one = cache[key]
         for spp in spps:
             m = meas.get((j.job, row, spp))
             if m is None:
@@ -218,8 +221,8 @@ def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, c
                    "floor": floor_of(meas, j.job, spp)}
             for c in candidates:
                 metric = "lab" if c == "covariance-lab" else "de2000"
-                rec[c] = float(np.mean(P.pixel_de2(cache[key], tr.t, spp, j.pixel_sampler, metric,
-                                                   incoherence=tr.incoherence)))
+                rec[c] = float(np.mean(P.pixel_de2(pc, tr.t, spp, j.pixel_sampler, metric, incoherence=tr.incoherence,
+                                                   terminated=tr.terminated, one_wavelength=one)))
             recs.append(rec)
     return recs
 

@@ -40,6 +40,9 @@ INCOHERENCE_SPP = 64
 INCOHERENCE_REPEATS = 8
 LO, HI = 380.0, 780.0
 
+#: The spectral film's channel of the share of light that kept one wavelength (design §6.8).
+TERMINATED = "wavelengths.terminated"
+
 FLAT = Spectrum("flat", "equal energy", np.array([LO, HI]), np.array([1.0, 1.0]))
 
 
@@ -59,6 +62,9 @@ class Transfer:
     #: seed pair of renders at n spp: n (Y_1 - Y_2)^2 / 2 over the pixel's Y^2 (unbiased per
     #: pixel, noisy; only means over many pixels are meant).
     incoherence: np.ndarray
+    #: (P,): each pixel's share of light carried by paths that kept one wavelength (a
+    #: dispersive surface), the spectral film's channel ``wavelengths.terminated``.
+    terminated: np.ndarray
 
 
 def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float) -> str:
@@ -101,15 +107,16 @@ def write_scene(scene: str, out: Path, shared: Path = G.SHARED, buckets: int = B
 
 def render(scene_file: Path, pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None,
            seed: int = 0, repeats: int = 1, name: str = "transfer.exr") -> Path:
-    """Render the transfer scene (once: an image already there is kept) to ``name`` beside
-    it."""
+    """Render the transfer scene to ``name`` beside it (once: an image newer than the scene
+    and the renderer is kept)."""
     from wavelength_pdf.renderer import find_pbrt
 
     exr = scene_file.with_name(name)
-    if exr.is_file() and exr.stat().st_mtime >= scene_file.stat().st_mtime:
-        return exr
+    binary = find_pbrt(pbrt)
+    if exr.is_file() and exr.stat().st_mtime >= max(scene_file.stat().st_mtime, binary.stat().st_mtime):
+        return exr  # made from this scene by this renderer
     tmp = exr.with_name(exr.stem + ".tmp.exr")
-    cmd = [str(find_pbrt(pbrt)), "--quiet", "--spp", str(spp), "--seed", str(seed), "--outfile", str(tmp),
+    cmd = [str(binary), "--quiet", "--spp", str(spp), "--seed", str(seed), "--outfile", str(tmp),
            *(["--wavelength-repeats", str(repeats)] if repeats > 1 else []),
            *(["--nthreads", str(nthreads)] if nthreads else []), str(scene_file)]
     done = subprocess.run(cmd, capture_output=True, text=True)
@@ -126,7 +133,7 @@ def load(exr: Path, pair: tuple[Path, Path] | None = None, pair_spp: int = INCOH
     from wavelength_pdf import predict as P
     from wavelength_pdf.evaluation.benchmark.measures import lit_pixels
     from wavelength_pdf.evaluation.metrics import rgb_to_xyz
-    from wavelength_pdf.exr import read_rgb, read_spectral
+    from wavelength_pdf.exr import read_channel, read_rgb, read_spectral
 
     centres, buckets = read_spectral(exr)
     rgb = read_rgb(exr)
@@ -142,8 +149,9 @@ def load(exr: Path, pair: tuple[Path, Path] | None = None, pair_spp: int = INCOH
     if pair is not None:
         y = rgb_to_xyz(rgb[mask])[:, 1]
         y1, y2 = (rgb_to_xyz(read_rgb(p)[mask])[:, 1] for p in pair)
-        r = np.where(y > 0, pair_spp * (y1 - y2) ** 2 / 2.0 / np.maximum(y, 1e-300) ** 2, 0.0)
-    return Transfer(centres, t * scale, mask, scale, r)
+        r = np.zeros_like(y)
+        np.divide(pair_spp * (y1 - y2) ** 2 / 2.0, y * y, out=r, where=y > 0)
+    return Transfer(centres, t * scale, mask, scale, r, read_channel(exr, TERMINATED)[mask])
 
 
 def _uniform_table():

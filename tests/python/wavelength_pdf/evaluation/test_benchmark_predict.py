@@ -171,3 +171,24 @@ def test_an_rgb_image_has_no_spectral_buckets(tmp_path):
         read_spectral(tmp_path / "rgb.exr")
     with pytest.raises(ImageError, match="no such image"):
         read_spectral(tmp_path / "missing.exr")
+
+
+def test_the_film_marks_the_light_that_kept_one_wavelength(tmp_path, pbrt):
+    """The spectral film's channel wavelengths.terminated: the share of a pixel's light carried
+    by paths that kept one wavelength. The prism (dispersive glass) has pixels lit only
+    through it and pixels it does not touch; a scene without dispersion has none."""
+    import subprocess
+
+    from wavelength_pdf.evaluation.benchmark import transfer
+    from wavelength_pdf.exr import read_channel
+
+    shares = {}
+    for scene in ("prism", "colorchecker"):
+        f = transfer.write_scene(scene, tmp_path)
+        subprocess.run([str(pbrt), "--quiet", "--spp", "16", "--outfile", str(tmp_path / f"{scene}.exr"), str(f)],
+                       check=True)
+        shares[scene] = read_channel(tmp_path / f"{scene}.exr", transfer.TERMINATED)
+    prism = shares["prism"]
+    assert prism.min() >= 0 and prism.max() <= 1
+    assert np.mean(prism == 0) > 0.2 and np.mean(prism > 0.99) > 0.01
+    assert np.all(shares["colorchecker"] == 0)
