@@ -6,7 +6,9 @@ Reads a finished benchmark's results.csv and the tables its rows rendered with (
 OUT/jobs/.../optimized-scene.csv, SHARED/tables/reference-4x81), computes every prediction of
 wavelength_pdf.predict for each row under the job's lamp, and writes prediction.csv (one line
 per job, spp and compared row: measured and predicted ratio to the optimized table),
-prediction-summary.csv (Spearman and spread) and prediction.png into --docs.
+prediction-summary.csv (Spearman and spread), prediction.png and choice.csv (per job and
+spp, the table or simple sampler that the last prediction ranks first, and its measured
+error beside the table's and the best simple sampler's) into --docs.
 
     PYTHONPATH=optimizer python scripts/predict_benchmark.py -o /path/to/out/benchmark
 """
@@ -91,6 +93,8 @@ def main(argv=None) -> int:
     BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates],
                  fit=a.colours != "pixels")
     cands = [*a.candidates, *(f for f in BP.FLOORED if f.split("+")[0] in a.candidates)]
+    if a.colours == "pixels":  # the floor predicted from the pixels too: nothing measured
+        cands += [f"{c}+path" for c in a.candidates if f"{c}+path" in recs[0]]
     prs = BP.pairs(recs, cands)
     summ = BP.summary(prs, cands)
     a.docs.mkdir(parents=True, exist_ok=True)
@@ -102,6 +106,18 @@ def main(argv=None) -> int:
             w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in s.items()})
     BP.plot(a.docs / "prediction.png", prs, cands)
     print(BP.markdown(summ))
+    # The image's health rule: per job, the table or the simple sampler the best prediction
+    # ranks first (with the measured floor where there is one: it does not change the order).
+    chooser = "covariance+floor" if "covariance+floor" in cands else cands[-1]
+    ch = BP.choices(recs, chooser)
+    if ch:
+        with open(a.docs / "choice.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(ch[0]))
+            w.writeheader()
+            for c in ch:
+                w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in c.items()})
+        print(f"\nChosen by {chooser}:\n")
+        print(BP.choices_markdown(ch))
     say(f"predict_benchmark: {len(jobs)} jobs, {len(prs)} pairs in {time.time() - t0:.0f} s; "
         f"wrote {a.docs / 'prediction.csv'}, prediction-summary.csv, prediction.png")
     return 0

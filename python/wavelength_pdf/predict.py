@@ -374,15 +374,13 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     independent).
 
     Units: a white surface lit by the lamp has Y = 1, Lab relative to D65 at Y = 1 (the
-    benchmark's image units, when t is scaled so: :mod:`.evaluation.benchmark.transfer`).
+    benchmark's image units, when t is scaled so: :mod:`.evaluation.transfer`).
 
     Returns
     -------
     (P,) array
         Each pixel's expected squared CIEDE2000 (``metric='lab'``: Lab distance).
     """
-    import colour
-
     B = pc.C.shape[0]
     t = np.atleast_2d(np.asarray(t, dtype=np.float64))
     if t.shape[1] != B:
@@ -409,7 +407,28 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
             raise ValueError(f"terminated needs one_wavelength, the basis' ({B}, 3, {B}, 3) covariance")
         share = per_pixel("terminated", terminated, 1.0)
         cov = (1.0 - share) ** 2 * cov + share ** 2 * (1.0 + r) * quad(np.asarray(one_wavelength)) / spp
-    xyz = t @ pc.target
+    return lab_quadratic(t @ pc.target, cov, metric)
+
+
+def path_de2(xyz: np.ndarray, incoherence: np.ndarray, spp: int, metric: str = "de2000") -> np.ndarray:
+    """Per pixel, the linearised squared error of the path noise alone (the benchmark's floor,
+    predicted): the mean of N samples a·c has the covariance r c c' / N (r the pixel's
+    incoherence, :func:`pixel_de2`, capped at N as there)."""
+    xyz = np.atleast_2d(np.asarray(xyz, dtype=np.float64))
+    r = np.minimum(np.asarray(incoherence, dtype=np.float64), spp)
+    if r.shape != (xyz.shape[0],) or np.any(~np.isfinite(r)) or np.any(r < 0):
+        raise ValueError(f"incoherence must be {xyz.shape[0]} finite values >= 0")
+    cov = (r / spp)[:, None, None] * xyz[:, :, None] * xyz[:, None, :]
+    return lab_quadratic(xyz, cov, metric)
+
+
+def lab_quadratic(xyz: np.ndarray, cov: np.ndarray, metric: str = "de2000") -> np.ndarray:
+    """Per pixel, E[d(Lab(xyz + e), Lab(xyz))^2] for a zero-mean error e of covariance ``cov``
+    (P, 3, 3), linearised: the covariance mapped to Lab by the Jacobian at each colour and
+    measured by CIEDE2000's local quadratic form along its principal axes (as
+    :func:`expected_quadratic`, vectorised), or by Lab distance (``metric='lab'``)."""
+    import colour
+
     white = _white_xy()
     h = 1e-6 * np.maximum(np.abs(xyz).max(axis=1, keepdims=True), 1e-12)
     jac = np.stack([(colour.XYZ_to_Lab(xyz + h * e, white) - colour.XYZ_to_Lab(xyz - h * e, white)) / (2 * h)
@@ -423,7 +442,7 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
         raise ValueError(f"metric must be 'de2000' or 'lab', not {metric!r}")
     lab_c = np.asarray(colour.XYZ_to_Lab(xyz, white))
     eps = 1e-4  # as expected_quadratic: small against any colour difference
-    total = np.zeros(t.shape[0])
+    total = np.zeros(xyz.shape[0])
     for i in range(3):
         v = V[:, :, i]
         q = 0.5 * sum(delta_e2000(lab_c + sgn * eps * v, lab_c) ** 2 for sgn in (1.0, -1.0)) / eps ** 2

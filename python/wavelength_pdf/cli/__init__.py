@@ -229,11 +229,12 @@ def build_parser() -> argparse.ArgumentParser:
     mitsuba.add_parser(sub)
 
     # The evaluation (design §6): evaluate, grid, published and demo (the README's main job).
-    from wavelength_pdf.cli import benchmark
+    from wavelength_pdf.cli import benchmark, choose
     from wavelength_pdf.cli.evaluate import add_subcommands
 
     add_subcommands(sub)
     benchmark.add_parser(sub, out_folder())
+    choose.add_parser(sub)
     return p
 
 

@@ -241,3 +241,22 @@ def test_hats_a_line_lamp_does_not_light_are_zero_not_refused():
     assert np.all(pcb.C[dark] == 0) and np.all(pcb.target[dark] == 0) and np.all(pcb.target[~dark, 1] > 0)
     white = P.covariance_de2(P.path_colours(table, line, None, points=2 ** 12), 16)
     np.testing.assert_allclose(P.pixel_de2(pcb, np.ones((1, centres.size)), 16), [white], rtol=1e-6, atol=1e-12)
+
+
+def test_path_noise_of_a_grey_pixel_is_its_lightness_noise():
+    """The path noise r c c' / N only scales a pixel's colour: for a grey (D65-white-point)
+    pixel of luminance Y, in Lab that moves L* = 116 Y^(1/3) - 16 alone, by
+    (116 / 3) Y^(1/3) per unit of relative change: E[ΔL*^2] = ((116 / 3) Y^(1/3))^2 r / N.
+    r is capped at N, as in pixel_de2."""
+    import colour
+
+    from wavelength_pdf.colorimetry import white_d65
+
+    white = np.asarray(white_d65(), dtype=np.float64)
+    white = white / white[1]
+    Y = np.array([0.2, 0.5, 0.9])
+    r = np.array([0.5, 2.0, 100.0])
+    got = P.path_de2(Y[:, None] * white[None, :], r, 16, "lab")
+    want = ((116.0 / 3.0) * np.cbrt(Y)) ** 2 * np.minimum(r, 16) / 16
+    np.testing.assert_allclose(got, want, rtol=1e-5)
+    assert colour.XYZ_to_Lab(white * 0.5, P._white_xy())[1:] == pytest.approx([0, 0], abs=1e-6)

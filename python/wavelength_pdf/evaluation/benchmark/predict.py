@@ -192,19 +192,38 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
     return recs
 
 
+def scene_transfer(scene: str, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
+                   spp: int | None = None):
+    """The transfer (:mod:`wavelength_pdf.evaluation.transfer`) of a benchmark scene at its
+    benchmark size, in ``out/transfer/SCENE`` (rendered once)."""
+    from wavelength_pdf.evaluation import transfer
+
+    spec = G.SCENES[scene]
+    if spec.own_lamps:
+        raise ValueError(f"{scene}: lit by its own lamps of several kinds, whose pixel spectra are not "
+                         "one lamp times the scene's transfer")
+    folder = Path(out) / "transfer" / scene
+    source = spec.path(shared)
+    if spec.water:
+        from wavelength_pdf.evaluation.glass_of_water import with_water
+
+        source = with_water(source, folder / "with-water" / "scene.pbrt")
+    return transfer.of_file(source, folder, spec.resolution, pbrt, spp or transfer.SPP)
+
+
 def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, cache: dict, spectrum,
                    out: Path, pbrt: Path | None) -> list[dict]:
     """``predict_jobs``' records of one job with ``colours='pixels'``: each prediction is the
     mean over the image's lit pixels of that pixel's own (:func:`wavelength_pdf.predict.pixel_de2`)."""
     from wavelength_pdf import predict as P
-    from wavelength_pdf.evaluation.benchmark import transfer
     from wavelength_pdf.table import read_table
 
     if j.scene not in by_scene:
-        by_scene[j.scene] = transfer.of_scene(j.scene, out, pbrt=pbrt)
+        by_scene[j.scene] = scene_transfer(j.scene, out, pbrt=pbrt)
     tr = by_scene[j.scene]
     basis = P.hat_basis(tr.centres, LO, HI)
     recs = []
+    path_noise: dict[int, float] = {}
     for row, path in j.tables.items():
         key = (str(path), j.spectrum, "pixels", tuple(tr.centres))
         if key not in cache:
@@ -219,6 +238,9 @@ def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, c
             rec = {"job": j.job, "regime": regime(j.scene), "scene": j.scene, "lamp": j.lamp,
                    "pixel_sampler": j.pixel_sampler, "spp": spp, "row": row, "de2": m["de2"],
                    "floor": floor_of(meas, j.job, spp)}
+            if spp not in path_noise:  # the same for every row: the pixels' colours and paths
+                path_noise[spp] = float(np.mean(P.path_de2(tr.t @ pc.target, tr.incoherence, spp)))
+            rec["path"] = path_noise[spp]
             for c in candidates:
                 metric = "lab" if c == "covariance-lab" else "de2000"
                 rec[c] = float(np.mean(P.pixel_de2(pc, tr.t, spp, j.pixel_sampler, metric, incoherence=tr.incoherence,
@@ -249,6 +271,8 @@ def add_floor(records: list[dict], bases: Sequence[str] = ("stratified", "strati
             for r in records:
                 if base in r:
                     r[f"{base}+floor"] = r[base] + r["floor"]
+                    if "path" in r:  # the floor predicted from the pixels (``colours='pixels'``)
+                        r[f"{base}+path"] = r[base] + r["path"]
         return
     def groups(r):
         return (r["scene"], r["pixel_sampler"], r["spp"]), (r["regime"], r["pixel_sampler"], r["spp"])
@@ -309,6 +333,43 @@ def summary(prs: Sequence[dict], candidates: Sequence[str], rows: Sequence[str] 
                             "log10_median": float(np.median(d)), "log10_p05": float(np.quantile(d, 0.05)),
                             "log10_p95": float(np.quantile(d, 0.95))})
     return out
+
+
+def choices(records: Sequence[dict], candidate: str, rows: Sequence[str] = (*G.SIMPLE, TABLE),
+            margin: float = 1.1) -> list[dict]:
+    """Per job and spp, the row of ``rows`` that ``candidate`` predicts best (the table, or a
+    simple sampler where the prediction says one beats it: the image's own health rule,
+    never worse than the best simple sampler), with its measured de2 beside the table's and
+    the best simple sampler's (chosen after the fact). ``worse`` marks a measured error above
+    ``margin`` times the best simple sampler's, for the chosen row and for the table."""
+    by = {}
+    for r in records:
+        if r["row"] in rows and math.isfinite(r.get(candidate, float("nan"))):
+            by.setdefault((r["job"], r["spp"]), {})[r["row"]] = r
+    out = []
+    for (job, spp), rs in sorted(by.items()):
+        if TABLE not in rs or not any(row in rs for row in G.SIMPLE):
+            continue
+        pick = min(rs, key=lambda row: rs[row][candidate])
+        best = min(rs[row]["de2"] for row in G.SIMPLE if row in rs)
+        out.append({"job": job, "scene": rs[pick]["scene"], "lamp": rs[pick]["lamp"], "spp": spp, "chosen": pick,
+                    "de2_chosen": rs[pick]["de2"], "de2_table": rs[TABLE]["de2"], "de2_best_simple": best,
+                    "chosen_worse": rs[pick]["de2"] > margin * best, "table_worse": rs[TABLE]["de2"] > margin * best})
+    return out
+
+
+def choices_markdown(ch: Sequence[dict]) -> str:
+    """Per spp: how often the table and the chosen row lose to the best simple sampler by
+    more than the margin, and the chosen row's error over the table's."""
+    lines = ["| spp | jobs | table worse than the best simple sampler by > 10 % | chosen row so | "
+             "chosen / table (median, min-max) | chose a simple sampler |", "|---|---|---|---|---|---|"]
+    for spp in sorted({c["spp"] for c in ch}):
+        sel = [c for c in ch if c["spp"] == spp]
+        r = np.array([c["de2_chosen"] / c["de2_table"] for c in sel])
+        lines.append(f"| {spp} | {len(sel)} | {sum(c['table_worse'] for c in sel)} | "
+                     f"{sum(c['chosen_worse'] for c in sel)} | {np.median(r):.3f} ({r.min():.2f}-{r.max():.2f}) | "
+                     f"{sum(c['chosen'] != TABLE for c in sel)} |")
+    return "\n".join(lines)
 
 
 def write_csv(path: Path, prs: Sequence[dict], candidates: Sequence[str]) -> None:

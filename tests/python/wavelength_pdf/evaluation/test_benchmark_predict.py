@@ -140,10 +140,10 @@ def test_pixel_colours_come_from_one_render_of_the_scene(tmp_path, pbrt):
     renderer's film, give the same luminance (the scale that puts the buckets in the image's
     units is 1 within 2 %); the copy of the spd table predicts exactly the spd table's error,
     uniform sampling more; only the linearised candidates are offered."""
-    from wavelength_pdf.evaluation.benchmark import transfer
+    from wavelength_pdf.evaluation import transfer
 
     out, results = _bench(tmp_path)
-    tr = transfer.of_scene("colorchecker", out, pbrt=pbrt, spp=64)
+    tr = BP.scene_transfer("colorchecker", out, pbrt=pbrt, spp=64)
     assert tr.scale == pytest.approx(1.0, rel=0.02)
     assert tr.t.shape == (int(tr.mask.sum()), transfer.BUCKETS) and np.all(tr.t >= 0)
     assert np.all(np.isfinite(tr.incoherence)) and np.all(tr.incoherence >= 0)
@@ -156,11 +156,15 @@ def test_pixel_colours_come_from_one_render_of_the_scene(tmp_path, pbrt):
         BP.predict_jobs(results, jobs, (16,), ("J",), "pixels", out=out, pbrt=pbrt)
 
 
-def test_a_scene_lit_by_its_own_lamps_has_no_transfer(tmp_path):
-    from wavelength_pdf.evaluation.benchmark import transfer
+def test_a_scene_lit_by_lamps_of_several_kinds_has_no_transfer(tmp_path):
+    from wavelength_pdf.evaluation import transfer
+    from wavelength_pdf.evaluation.benchmark import grid as G
 
     with pytest.raises(ValueError, match="own lamps"):
-        transfer.write_scene("night-street", tmp_path)
+        BP.scene_transfer("night-street", tmp_path)
+    with pytest.raises(ValueError, match="3 kinds of light"):
+        transfer.one_kind(G.SCENES["night-street"].path())
+    assert transfer.one_kind(G.SCENES["colorchecker"].path()).values.max() > 0
 
 
 def test_an_rgb_image_has_no_spectral_buckets(tmp_path):
@@ -179,12 +183,13 @@ def test_the_film_marks_the_light_that_kept_one_wavelength(tmp_path, pbrt):
     through it and pixels it does not touch; a scene without dispersion has none."""
     import subprocess
 
-    from wavelength_pdf.evaluation.benchmark import transfer
+    from wavelength_pdf.evaluation import transfer
+    from wavelength_pdf.evaluation.benchmark import grid as G
     from wavelength_pdf.exr import read_channel
 
     shares = {}
     for scene in ("prism", "colorchecker"):
-        f = transfer.write_scene(scene, tmp_path)
+        f = transfer.copy_scene(G.SCENES[scene].path(), tmp_path / scene, G.SCENES[scene].resolution)
         subprocess.run([str(pbrt), "--quiet", "--spp", "16", "--outfile", str(tmp_path / f"{scene}.exr"), str(f)],
                        check=True)
         shares[scene] = read_channel(tmp_path / f"{scene}.exr", transfer.TERMINATED)
@@ -192,3 +197,22 @@ def test_the_film_marks_the_light_that_kept_one_wavelength(tmp_path, pbrt):
     assert prism.min() >= 0 and prism.max() <= 1
     assert np.mean(prism == 0) > 0.2 and np.mean(prism > 0.99) > 0.01
     assert np.all(shares["colorchecker"] == 0)
+
+
+def test_the_choice_is_the_predicted_best_and_is_scored_against_the_best_simple_sampler():
+    """choices(): per job and spp the row the prediction ranks first; its measured error
+    beside the table's and the best simple sampler's, and whether each loses to the latter by
+    more than 10 %."""
+    def rec(job, row, de2, pred):
+        return {"job": job, "scene": job.split("/")[0], "lamp": "L", "spp": 16, "row": row, "de2": de2, "p": pred}
+
+    records = [rec("a/L/sobol", "optimized", 1.0, 1.0), rec("a/L/sobol", "spd", 1.2, 2.0),
+               rec("a/L/sobol", "uniform", 3.0, 9.0),
+               rec("b/L/sobol", "optimized", 2.0, 1.5), rec("b/L/sobol", "spd", 1.5, 1.0),
+               rec("b/L/sobol", "uniform", 3.0, 9.0), rec("b/L/sobol", "start", 0.1, 0.1)]
+    ch = {c["job"]: c for c in BP.choices(records, "p")}
+    assert ch["a/L/sobol"]["chosen"] == "optimized" and not ch["a/L/sobol"]["table_worse"]
+    b = ch["b/L/sobol"]
+    assert b["chosen"] == "spd"  # "start" is not a candidate: the table or a simple sampler
+    assert b["table_worse"] and not b["chosen_worse"] and b["de2_best_simple"] == 1.5
+    assert "| 16 | 2 | 1 | 0 |" in BP.choices_markdown(list(ch.values()))

@@ -1,20 +1,24 @@
-"""Each pixel's spectrum under any lamp, from one render of the scene (design §6.7).
+"""Each pixel's spectrum under any lamp, from one render of the scene (design §6.8).
 
-A scene lit by one lamp (every emitter given the lamp's spectrum, normalized by pbrt-v4 to the
-same luminance whatever its shape) sends to pixel p the radiance E(λ) G_p(λ) / Y(E): G_p is
-what the scene's light paths do to the light (reflection, filtering, dispersion, exposure) and
-does not depend on the lamp. One render under a flat lamp with a spectral film gives G_p at the
-film's bucket centres; with G_p linear between them (:func:`wavelength_pdf.predict.hat_basis`),
-the pixel's colour and the noise of its estimate are known for every lamp and table without
-rendering again (:func:`wavelength_pdf.predict.pixel_de2`). This is what the prediction of the
-image (``predict_benchmark.py --colours pixels``) uses instead of a white surface.
+A scene lit by one kind of lamp (every emitter's spectrum the same up to scale; pbrt-v4
+normalizes each to the same luminance whatever its shape) sends to pixel p the radiance
+E(λ) G_p(λ) / Y(E): G_p is what the scene's light paths do to the light (reflection, filtering,
+exposure) and does not depend on the lamp. One render under a flat lamp with a spectral film
+gives G_p at the film's bucket centres; with G_p linear between them
+(:func:`wavelength_pdf.predict.hat_basis`), the pixel's colour and the noise of its estimate
+are known for every lamp and table without rendering again
+(:func:`wavelength_pdf.predict.pixel_de2`). Two more renders of the same copy, a seed pair,
+measure each pixel's incoherence (how much its paths' magnitude varies from sample to
+sample); the spectral film's channel ``wavelengths.terminated`` gives each pixel's share of
+light that kept one wavelength (dispersion). ``wavelength-pdf choose`` and the benchmark's
+prediction (``predict_benchmark.py --colours pixels``) use this.
 
 Units: the coefficients are scaled so that t_p · (the basis' colours under a lamp) is the
 pixel's XYZ in the image's own units (Lab relative to D65 at Y = 1, as the benchmark's
 measures): one scale per scene, the ratio of the render's own luminance (its RGB) to the
 buckets' (sums over the lit pixels), which absorbs the film's sensor, exposure and pbrt-v4's
-normalization of spectra. Scenes with their own lamps of several kinds are not separable so
-(their pixel spectra are sums of differently shaped lamps) and are refused.
+normalization of spectra. Scenes with lamps of several kinds are not separable so (their
+pixel spectra are sums of differently shaped lamps) and are refused.
 """
 from __future__ import annotations
 
@@ -24,7 +28,6 @@ from pathlib import Path
 
 import numpy as np
 
-from wavelength_pdf.evaluation.benchmark import grid as G
 from wavelength_pdf.spectra import Spectrum
 
 #: The spectral film's buckets over the benchmark's range (20 nm each): surface colours and
@@ -80,22 +83,29 @@ def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float) ->
     return text[:arg.start] + new + text[arg.end:]
 
 
-def write_scene(scene: str, out: Path, shared: Path = G.SHARED, buckets: int = BUCKETS) -> Path:
-    """The scene's copy under a flat lamp with a spectral film, at the benchmark's size, at
-    ``out/transfer/SCENE/scene.pbrt``."""
+def one_kind(source: str | Path):
+    """The spectrum of the one kind of light that lights ``source`` (its emitters' spectra all
+    the same up to scale), cut to [LO, HI]; ValueError naming them when there are several."""
+    from wavelength_pdf.scene_spectra import scene_spectra
+
+    kinds = scene_spectra(source, LO, HI)
+    if len(kinds) > 1:
+        raise ValueError(f"{source}: lit by {len(kinds)} kinds of light ({', '.join(k.name for k in kinds)}), "
+                         "whose pixel spectra are not one lamp times the scene's transfer")
+    return kinds[0]
+
+
+def copy_scene(source: str | Path, folder: str | Path, resolution: tuple[int, int] | float | None = None,
+               buckets: int = BUCKETS) -> Path:
+    """``folder/scene.pbrt``: a copy of ``source`` whose every emitter has a flat spectrum over
+    [LO, HI] and whose film is a spectral film of ``buckets``, at ``resolution`` (design §6.1's
+    scene copy). Its transfer holds for the scene relit by any one lamp (as the benchmark's
+    jobs are); for the scene's own lamps, only when they are of one kind
+    (:func:`one_kind`)."""
     from wavelength_pdf.evaluation.scene_edit import edit_scene
 
-    spec = G.SCENES[scene]
-    if spec.own_lamps:
-        raise ValueError(f"{scene}: lit by its own lamps of several kinds, whose pixel spectra are not "
-                         "one lamp times the scene's transfer")
-    folder = Path(out) / "transfer" / scene
-    source = spec.path(shared)
-    if spec.water:
-        from wavelength_pdf.evaluation.glass_of_water import with_water
-
-        source = with_water(source, folder / "with-water" / "scene.pbrt")
-    draft = edit_scene(source, FLAT, folder / "draft.pbrt", lo=LO, hi=HI, resolution=spec.resolution,
+    source, folder = Path(source), Path(folder)
+    draft = edit_scene(source, FLAT, folder / "draft.pbrt", lo=LO, hi=HI, resolution=resolution,
                        pixel_sampler="sobol")
     text = _spectral_film(draft.read_text(), draft, buckets, LO, HI)
     draft.unlink()
@@ -160,10 +170,11 @@ def _uniform_table():
     return uniform_table(LO, HI)
 
 
-def of_scene(scene: str, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None, spp: int = SPP,
-             nthreads: int | None = None) -> Transfer:
-    """Write, render (once) and load the transfer of a benchmark scene, with its incoherence."""
-    scene_file = write_scene(scene, out, shared)
+def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] | float | None = None,
+            pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None) -> Transfer:
+    """Copy (:func:`copy_scene`), render (once: kept while the scene and the renderer are
+    unchanged) and load the transfer of a scene, with its incoherence."""
+    scene_file = copy_scene(source, folder, resolution)
     pair = tuple(render(scene_file, pbrt, INCOHERENCE_SPP, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
                         name=f"incoherence-seed{seed}.exr") for seed in (1, 2))
     return load(render(scene_file, pbrt, spp, nthreads), pair)

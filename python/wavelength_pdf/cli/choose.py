@@ -1,0 +1,77 @@
+"""``wavelength-pdf choose SCENE.pbrt [TABLE.csv ...]``: which table for this scene, by its
+predicted image error (wavelength_pdf.evaluation.choose, design §6.8)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from wavelength_pdf.cli import BadInput, Formatter, out_folder, positive_int
+
+
+def cmd_choose(args: argparse.Namespace) -> int:
+    from wavelength_pdf.evaluation.choose import predict_tables
+    from wavelength_pdf.table import read_table, write_table
+
+    if not args.scene.is_file():
+        raise BadInput(f"{args.scene}: no such scene file")
+    if not args.tables and args.no_simple:
+        raise BadInput("nothing to compare: give tables or drop --no-simple")
+    if not 0 < args.resolution_scale <= 1:
+        raise BadInput(f"--resolution-scale must lie in (0, 1], not {args.resolution_scale:g}")
+    tables = {}
+    for path in args.tables:
+        tables[str(path)] = read_table(path)  # every table read (and refused) before any render
+    workdir = args.workdir or out_folder() / "choose" / args.scene.resolve().parent.name / args.scene.stem
+    say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    preds = predict_tables(args.scene, tables, args.spp, workdir, pixel_sampler=args.pixel_sampler,
+                           resolution=args.resolution_scale, pbrt=args.pbrt, transfer_spp=args.transfer_spp,
+                           simple=not args.no_simple, say=say)
+    width = max(len(p.name) for p in preds)
+    print(f"{args.scene} at {args.spp} spp ({args.pixel_sampler}): predicted mean squared CIEDE2000 over "
+          f"the lit pixels")
+    print(f"  {'table':<{width}}  {'wavelengths':>11}  {'with paths':>10}")
+    for p in preds:
+        print(f"  {p.name:<{width}}  {p.wavelength:11.4g}  {p.total:10.4g}")
+    best = preds[0]
+    print(f"best: {best.name}")
+    if args.output:
+        from wavelength_pdf.table import Table
+
+        note = (f"chosen by wavelength-pdf choose for {args.scene} at {args.spp} spp ({args.pixel_sampler}): "
+                f"predicted de2 {best.total:.4g}, of {len(preds)} candidates")
+        write_table(args.output, Table(best.table.grid, best.table.pdfs, [*best.table.comments, note]))
+        print(f"wrote {args.output}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    c = sub.add_parser(
+        "choose", formatter_class=Formatter,
+        help="which table for this scene: each candidate's image error, predicted from three renders",
+        description="Predicts the image error (mean squared CIEDE2000 over the lit pixels, at the spp you "
+                    "render at) of each table given and of the simple samplers of the scene's lamp "
+                    "(uniform, visible, spd, luminance, xyz), from three renders of a copy of the scene "
+                    "under a flat lamp (a spectral film at 1024 spp and a seed pair at 64 spp, at a tenth "
+                    "of its size; design §6.8), and prints them best first; -o writes the best. The scene "
+                    "must be lit by one kind of light (emitters whose spectra are equal up to scale). Over "
+                    "the benchmark's scene sweep its choice was never worse than the best simple sampler by "
+                    "more than 10 % (docs/benchmark.md).")
+    c.add_argument("scene", type=Path, metavar="SCENE.pbrt", help="a pbrt-v4 scene lit by one kind of light")
+    c.add_argument("tables", type=Path, nargs="*", metavar="TABLE.csv", help="tables to compare (design §2)")
+    c.add_argument("--spp", type=positive_int, default=64, help="the samples per pixel you render at (a power of "
+                   "two with the low-discrepancy sampler; default 64)")
+    c.add_argument("--pixel-sampler", choices=("sobol", "independent"), default="sobol",
+                   help="your pixel sampler: low-discrepancy (pbrt-v4's sobol and zsobol samplers; default) "
+                        "or independent")
+    c.add_argument("--no-simple", action="store_true", help="compare the given tables only")
+    c.add_argument("-o", "--output", type=Path, default=None, metavar="BEST.csv", help="write the best table here")
+    c.add_argument("--resolution-scale", type=float, default=0.1, metavar="F",
+                   help="the renders' film size as a share of the scene's (default 0.1)")
+    c.add_argument("--transfer-spp", type=positive_int, default=1024, metavar="N",
+                   help="samples per pixel of the spectral render (default 1024)")
+    c.add_argument("--workdir", type=Path, default=None, metavar="DIR",
+                   help="where the renders go, kept for the next run (default out/choose/FOLDER/SCENE)")
+    c.add_argument("--pbrt", type=Path, default=None, help="the renderer (default: as design §7)")
+    c.add_argument("--quiet", action="store_true", help="no progress messages")
+    c.set_defaults(func=cmd_choose, extra="evaluation")

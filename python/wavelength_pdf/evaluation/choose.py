@@ -1,0 +1,92 @@
+"""Which table for this scene? Each candidate's image error, predicted from three renders of
+the scene (design §6.8), without rendering with any of them.
+
+The candidates are the given tables and the simple samplers of design §1.7 for the scene's
+lamp (``uniform``, ``visible``, ``spd``, ``luminance``, ``xyz``). For each, the prediction is
+the mean over the scene's lit pixels of the linearised squared CIEDE2000 of the pixel's mean
+of N samples, with each pixel's own light, incoherence and dispersion
+(:func:`wavelength_pdf.predict.pixel_de2`), plus the path noise all candidates share
+(:func:`wavelength_pdf.predict.path_de2`). Over the benchmark's scene sweep it ranks the
+samplers at 0.91-0.95 (Spearman) and its choice was never worse than the best simple
+sampler by more than 10 % (docs/benchmark.md, "Each pixel's own light").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Mapping
+
+import numpy as np
+
+from wavelength_pdf.evaluation import transfer
+
+#: The simple samplers, by the benchmark's names (design §1.7, §6.7).
+SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """One candidate's predicted image error (mean over lit pixels, squared CIEDE2000)."""
+
+    name: str
+    table: object
+    #: The wavelength sampling's part, the candidate's own.
+    wavelength: float
+    #: The path noise, the same for every candidate.
+    path: float
+
+    @property
+    def total(self) -> float:
+        return self.wavelength + self.path
+
+
+def simple_tables(spectrum) -> dict[str, object]:
+    """The simple samplers' tables for ``spectrum`` over the transfer's range."""
+    from wavelength_pdf import stratified
+
+    out = {"uniform": stratified.uniform_table(transfer.LO, transfer.HI), "visible": stratified.visible_table()}
+    for w in ("spd", "luminance", "xyz"):
+        out[w] = stratified.stratified_table(spectrum, w, transfer.LO, transfer.HI)
+    return out
+
+
+def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,
+                   pixel_sampler: str = "sobol", resolution: float = 0.1, pbrt: Path | None = None,
+                   transfer_spp: int = transfer.SPP, simple: bool = True,
+                   say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
+    """Every candidate's predicted error in ``scene`` at ``spp``, best first.
+
+    ``scene`` must be lit by one kind of light (its emitters' spectra equal up to scale);
+    ``tables`` maps names to :class:`~wavelength_pdf.table.Table`; ``simple`` adds the simple
+    samplers. The renders go to ``workdir`` and are kept while the scene and the renderer
+    are unchanged."""
+    from wavelength_pdf import predict as P
+
+    if spp < 1:
+        raise ValueError(f"spp must be at least 1, not {spp}")
+    if pixel_sampler not in P.PIXEL_SAMPLERS:
+        raise ValueError(f"pixel sampler must be one of {P.PIXEL_SAMPLERS}, not {pixel_sampler!r}")
+    if pixel_sampler == "sobol" and P.U_POINTS % spp:
+        raise ValueError(f"spp {spp} is not a power of two up to {P.U_POINTS}: the low-discrepancy sampler's "
+                         "strata are modelled at powers of two (use --pixel-sampler independent otherwise)")
+    spectrum = transfer.one_kind(scene)
+    cands = dict(simple_tables(spectrum)) if simple else {}
+    for name, table in tables.items():
+        cands[name if name not in cands else f"{name} (given)"] = table
+    if not cands:
+        raise ValueError("no table to predict: give tables or keep the simple samplers")
+    say(f"choose: the scene's transfer ({transfer_spp} spp) and incoherence (2 x {transfer.INCOHERENCE_SPP} spp) "
+        f"at {resolution:g} of its size, in {workdir}")
+    tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp)
+    basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
+    out, path = [], None
+    for name, table in cands.items():
+        say(f"choose: predicting {name}")
+        pc = P.basis_path_colours(table, spectrum, basis)
+        one = P.one_wavelength_covariance(table, spectrum, basis)
+        w = float(np.mean(P.pixel_de2(pc, tr.t, spp, pixel_sampler, incoherence=tr.incoherence,
+                                      terminated=tr.terminated, one_wavelength=one)))
+        if path is None:
+            path = float(np.mean(P.path_de2(tr.t @ pc.target, tr.incoherence, spp)))
+        out.append(Prediction(name, table, w, path))
+    return sorted(out, key=lambda p: p.wavelength)

@@ -1,0 +1,64 @@
+"""wavelength-pdf choose: each table's image error in a scene, predicted from three renders of
+it (wavelength_pdf.evaluation.choose, design §6.8)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from repo_paths import REPO
+from wavelength_pdf.cli import main
+from wavelength_pdf.evaluation import choose
+from wavelength_pdf.table import read_table
+
+BOX = REPO / "scenes" / "cornell-box" / "scene.pbrt"  # one tri-band fluorescent lamp
+TWO = REPO / "scenes" / "cornell-box-two-lamps" / "scene.pbrt"
+
+
+@pytest.fixture(scope="module")
+def box_predictions(tmp_path_factory, pbrt):
+    from wavelength_pdf.evaluation import transfer
+
+    spd = choose.simple_tables(transfer.one_kind(BOX))["spd"]
+    work = tmp_path_factory.mktemp("choose")
+    return choose.predict_tables(BOX, {"copy-of-spd": spd}, 16, work, resolution=0.08, pbrt=pbrt,
+                                 transfer_spp=128), work
+
+
+def test_under_a_line_lamp_the_lamps_own_samplers_are_predicted_best(box_predictions):
+    """Under a tri-band fluorescent lamp, sampling the lamp's spectrum (spd, xyz) leaves far
+    less colour noise than uniform or visible sampling; a table equal to spd is predicted
+    exactly as spd; the path noise is every candidate's."""
+    preds, _ = box_predictions
+    by = {p.name: p for p in preds}
+    assert set(by) == {*choose.SIMPLE, "copy-of-spd"}
+    assert [p.wavelength for p in preds] == sorted(p.wavelength for p in preds)
+    assert by["copy-of-spd"].wavelength == by["spd"].wavelength
+    assert max(by["spd"].wavelength, by["xyz"].wavelength) < 0.2 * min(by["uniform"].wavelength,
+                                                                        by["visible"].wavelength)
+    assert len({p.path for p in preds}) == 1 and preds[0].path > 0
+
+
+def test_cli_writes_the_best_table(box_predictions, tmp_path, pbrt, capsys):
+    preds, work = box_predictions
+    out = tmp_path / "best.csv"
+    assert main(["choose", str(BOX), "--spp", "16", "--resolution-scale", "0.08", "--transfer-spp", "128",
+                 "--workdir", str(work), "--pbrt", str(pbrt), "--quiet", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"best: {preds[0].name}" in text
+    best = read_table(out)
+    np.testing.assert_array_equal(best.pdfs, np.asarray(preds[0].table.pdfs))
+    assert any("chosen by wavelength-pdf choose" in c for c in best.comments)
+
+
+@pytest.mark.parametrize("args, message", [
+    ([str(TWO)], "2 kinds of light"),
+    ([str(BOX), "--spp", "48"], "not a power of two"),
+    ([str(BOX), "missing.csv"], "missing.csv"),
+    ([str(BOX), "--no-simple"], "nothing to compare"),
+    ([str(BOX), "--resolution-scale", "2"], "resolution-scale"),
+])
+def test_bad_input_is_refused_before_any_render(args, message, tmp_path, capsys):
+    work = tmp_path / "work"
+    assert main(["choose", *args, "--workdir", str(work)]) == 2
+    assert message in capsys.readouterr().err
+    assert not work.exists()
