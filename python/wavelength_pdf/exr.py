@@ -22,6 +22,19 @@ class ImageError(ValueError):
     """An image that cannot be read as linear RGB."""
 
 
+def _channels(path: str | Path) -> dict[str, np.ndarray]:
+    """Every channel of an EXR file by name (OpenEXR's grouping: "RGB" for R, G, B)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such image file")
+    OpenEXR = _openexr()
+    try:
+        with OpenEXR.File(str(path)) as f:
+            return {name: np.asarray(ch.pixels, dtype=np.float64) for name, ch in f.channels().items()}
+    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
+        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+
+
 def read_rgb(path: str | Path) -> np.ndarray:
     """Read an EXR file as a (height, width, 3) float64 array of linear RGB.
 
@@ -30,26 +43,14 @@ def read_rgb(path: str | Path) -> np.ndarray:
     ImageError
         If the file is missing, not an EXR file, or has no R, G and B channels.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise ImageError(f"{path}: no such image file")
-    OpenEXR = _openexr()
-    try:
-        with OpenEXR.File(str(path)) as f:
-            channels = f.channels()
-            if "RGB" in channels:
-                rgb = np.asarray(channels["RGB"].pixels, dtype=np.float64)
-            elif all(c in channels for c in "RGB"):
-                rgb = np.stack([np.asarray(channels[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
-            elif "RGBA" in channels:
-                rgb = np.asarray(channels["RGBA"].pixels, dtype=np.float64)[..., :3]
-            else:
-                raise ImageError(f"{path}: no R, G, B channels (has {sorted(channels)})")
-    except ImageError:
-        raise
-    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
-        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
-    return rgb
+    channels = _channels(path)
+    if "RGB" in channels:
+        return channels["RGB"]
+    if all(c in channels for c in "RGB"):
+        return np.stack([channels[c] for c in "RGB"], axis=-1)
+    if "RGBA" in channels:
+        return channels["RGBA"][..., :3]
+    raise ImageError(f"{path}: no R, G, B channels (has {sorted(channels)})")
 
 
 def read_spectral(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
@@ -62,19 +63,8 @@ def read_spectral(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     ImageError
         If the file is missing, not an EXR file, or has no spectral channel.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise ImageError(f"{path}: no such image file")
-    OpenEXR = _openexr()
-    try:
-        with OpenEXR.File(str(path)) as f:
-            channels = f.channels()
-            named = {}
-            for name, ch in channels.items():
-                if name.startswith("S0.") and name.endswith("nm"):
-                    named[float(name[3:-2].replace(",", "."))] = np.asarray(ch.pixels, dtype=np.float64)
-    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
-        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+    named = {float(name[3:-2].replace(",", ".")): ch for name, ch in _channels(path).items()
+             if name.startswith("S0.") and name.endswith("nm")}
     if not named:
         raise ImageError(f"{path}: no spectral channels S0.<nm>nm (a \"spectral\" film writes them)")
     centres = np.array(sorted(named))
@@ -90,20 +80,10 @@ def read_channel(path: str | Path, name: str) -> np.ndarray:
     ImageError
         If the file is missing, not an EXR file, or has no such channel.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise ImageError(f"{path}: no such image file")
-    OpenEXR = _openexr()
-    try:
-        with OpenEXR.File(str(path)) as f:
-            channels = f.channels()
-            if name not in channels:
-                raise ImageError(f"{path}: no channel {name!r} (has {sorted(channels)[:8]}...)")
-            return np.asarray(channels[name].pixels, dtype=np.float64)
-    except ImageError:
-        raise
-    except Exception as e:  # OpenEXR raises plain exceptions for unreadable files
-        raise ImageError(f"{path}: cannot read as OpenEXR: {e}") from e
+    channels = _channels(path)
+    if name not in channels:
+        raise ImageError(f"{path}: no channel {name!r} (has {sorted(channels)[:8]}...)")
+    return channels[name]
 
 
 def read_header(path: str | Path) -> dict:

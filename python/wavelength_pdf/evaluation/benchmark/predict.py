@@ -180,16 +180,23 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
                 cache[key] = P.path_colours(read_table(path), spectra[j.spectrum], use_refl)
             pc = cache[key]
             for spp in spps:
-                m = meas.get((j.job, row, spp))
-                if m is None:
+                rec = _record(j, row, spp, meas)
+                if rec is None:
                     continue
-                rec = {"job": j.job, "regime": regime(j.scene), "scene": j.scene, "lamp": j.lamp,
-                       "pixel_sampler": j.pixel_sampler, "spp": spp, "row": row, "de2": m["de2"],
-                       "floor": floor_of(meas, j.job, spp)}
                 for c in candidates:
                     rec[c] = P.CANDIDATES[c](pc, spp, j.pixel_sampler)
                 recs.append(rec)
     return recs
+
+
+def _record(j: JobInputs, row: str, spp: int, meas: dict) -> dict | None:
+    """A prediction record's measured part (None where the row was not rendered at spp)."""
+    m = meas.get((j.job, row, spp))
+    if m is None:
+        return None
+    return {"job": j.job, "regime": regime(j.scene), "scene": j.scene, "lamp": j.lamp,
+            "pixel_sampler": j.pixel_sampler, "spp": spp, "row": row, "de2": m["de2"],
+            "floor": floor_of(meas, j.job, spp)}
 
 
 def scene_transfer(scene: str, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
@@ -232,12 +239,9 @@ def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, c
                           P.one_wavelength_covariance(table, spectrum, basis))
         pc, one = cache[key]
         for spp in spps:
-            m = meas.get((j.job, row, spp))
-            if m is None:
+            rec = _record(j, row, spp, meas)
+            if rec is None:
                 continue
-            rec = {"job": j.job, "regime": regime(j.scene), "scene": j.scene, "lamp": j.lamp,
-                   "pixel_sampler": j.pixel_sampler, "spp": spp, "row": row, "de2": m["de2"],
-                   "floor": floor_of(meas, j.job, spp)}
             if spp not in path_noise:  # the same for every row: the pixels' colours and paths
                 path_noise[spp] = float(np.mean(P.path_de2(tr.t @ pc.target, tr.incoherence, spp)))
             rec["path"] = path_noise[spp]
