@@ -85,10 +85,19 @@ def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float) ->
 
 def one_kind(source: str | Path):
     """The spectrum of the one kind of light that lights ``source`` (its emitters' spectra all
-    the same up to scale), cut to [LO, HI]; ValueError naming them when there are several."""
-    from wavelength_pdf.scene_spectra import scene_spectra
+    the same up to scale), cut to [LO, HI]; ValueError naming them when there are several, or
+    when an emitter has no lamp spectrum (RGB, an image: its light is of another kind)."""
+    import warnings
 
-    kinds = scene_spectra(source, LO, HI)
+    from wavelength_pdf.scene_spectra import NotOptimizableWarning, scene_spectra
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", NotOptimizableWarning)
+        kinds = scene_spectra(source, LO, HI)
+    other = [w for w in caught if issubclass(w.category, NotOptimizableWarning)]
+    if other:
+        raise ValueError(f"{str(other[0].message).split(': not optimizable')[0]}: an emitter without a lamp "
+                         "spectrum, whose light is not of the scene's one kind")
     if len(kinds) > 1:
         raise ValueError(f"{source}: lit by {len(kinds)} kinds of light ({', '.join(k.name for k in kinds)}), "
                          "whose pixel spectra are not one lamp times the scene's transfer")

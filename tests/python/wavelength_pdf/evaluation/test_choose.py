@@ -50,6 +50,20 @@ def test_cli_writes_the_best_table(box_predictions, tmp_path, pbrt, capsys):
     assert any("chosen by wavelength-pdf choose" in c for c in best.comments)
 
 
+def test_an_emitter_of_another_kind_is_refused(tmp_path, capsys):
+    """An RGB emitter beside a lamp with a spectrum: its light is not the lamp's, so the scene
+    is not one lamp times a transfer; refused, naming the emitter's file and line."""
+    scene = tmp_path / "mixed.pbrt"
+    text = (REPO / "tests" / "data" / "scenes" / "inline.pbrt").read_text()
+    scene.write_text(text + 'AttributeBegin\n  AreaLightSource "diffuse" "rgb L" [ 1 0.8 0.6 ]\n'
+                            '  Shape "sphere" "float radius" [ 0.2 ]\nAttributeEnd\n')
+    work = tmp_path / "work"
+    assert main(["choose", str(scene), "--workdir", str(work)]) == 2
+    err = capsys.readouterr().err
+    assert f"mixed.pbrt:{len(text.splitlines()) + 2}:" in err and "without a lamp spectrum" in err
+    assert not work.exists()
+
+
 @pytest.mark.parametrize("args, message", [
     ([str(TWO)], "2 kinds of light"),
     ([str(BOX), "--spp", "48"], "not a power of two"),
