@@ -70,17 +70,27 @@ class Transfer:
     terminated: np.ndarray
 
 
-def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float) -> str:
-    """``text`` with its Film statement made a spectral film of ``buckets`` over [lo, hi]."""
+def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float,
+                   size: tuple[int, int]) -> str:
+    """``text`` with its Film statement made a spectral film of ``buckets`` over [lo, hi]; a
+    scene without one (pbrt-v4's default film) gets one of ``size`` before its WorldBegin."""
     from wavelength_pdf.pbrt_syntax import split_params, statements, tokenize
 
-    films = [split_params(st, 1) for st in statements(tokenize(text, path)) if st.directive.text == "Film"]
-    if len(films) != 1:
-        raise ValueError(f"{path}: needs exactly one Film statement (found {len(films)})")
-    arg = films[0].args[0]
-    new = (f'"spectral" "integer nbuckets" [ {buckets} ] "float lambdamin" [ {lo:g} ] '
-           f'"float lambdamax" [ {hi:g} ]')
-    return text[:arg.start] + new + text[arg.end:]
+    sts = list(statements(tokenize(text, path)))
+    films = [split_params(st, 1) for st in sts if st.directive.text == "Film"]
+    spectral = (f'"spectral" "integer nbuckets" [ {buckets} ] "float lambdamin" [ {lo:g} ] '
+                f'"float lambdamax" [ {hi:g} ]')
+    if len(films) > 1:
+        raise ValueError(f"{path}: {len(films)} Film statements (lines "
+                         f"{', '.join(str(f.directive.line) for f in films)}); a scene has one")
+    if films:
+        arg = films[0].args[0]
+        return text[:arg.start] + spectral + text[arg.end:]
+    world = next((st for st in sts if st.directive.text == "WorldBegin"), None)
+    if world is None:
+        raise ValueError(f"{path}: no Film statement and no WorldBegin to put one before")
+    film = f'Film {spectral} "integer xresolution" [ {size[0]} ] "integer yresolution" [ {size[1]} ]\n'
+    return text[:world.directive.start] + film + text[world.directive.start:]
 
 
 def one_kind(source: str | Path):
@@ -111,13 +121,17 @@ def copy_scene(source: str | Path, folder: str | Path, resolution: tuple[int, in
     scene copy). Its transfer holds for the scene relit by any one lamp (as the benchmark's
     jobs are); for the scene's own lamps, only when they are of one kind
     (:func:`one_kind`)."""
-    from wavelength_pdf.evaluation.scene_edit import edit_scene
+    from wavelength_pdf.evaluation.scene_edit import DEFAULT_FILM, edit_scene
 
     source, folder = Path(source), Path(folder)
     draft = edit_scene(source, FLAT, folder / "draft.pbrt", lo=LO, hi=HI, resolution=resolution,
                        pixel_sampler="sobol")
-    text = _spectral_film(draft.read_text(), draft, buckets, LO, HI)
-    draft.unlink()
+    size = resolution if isinstance(resolution, tuple) else \
+        tuple(max(1, round(v * (resolution or 1.0))) for v in DEFAULT_FILM)
+    try:
+        text = _spectral_film(draft.read_text(), draft, buckets, LO, HI, size)
+    finally:
+        draft.unlink()
     path = folder / "scene.pbrt"
     if not path.is_file() or path.read_text() != text:  # unchanged: its renders stay valid
         path.write_text(text)

@@ -76,3 +76,18 @@ def test_bad_input_is_refused_before_any_render(args, message, tmp_path, capsys)
     assert main(["choose", *args, "--workdir", str(work)]) == 2
     assert message in capsys.readouterr().err
     assert not work.exists()
+
+
+def test_a_scene_without_a_film_gets_a_spectral_one(tmp_path, pbrt, capsys):
+    """pbrt-v4's default film (1280 x 720) when the scene has no Film statement: the copy gets
+    a spectral film of that size times the scale, before WorldBegin, and the choice runs."""
+    text = (REPO / "tests" / "data" / "scenes" / "inline.pbrt").read_text()
+    scene = tmp_path / "nofilm.pbrt"
+    scene.write_text("".join(line for line in text.splitlines(keepends=True) if not line.startswith("Film")))
+    work = tmp_path / "work"
+    assert main(["choose", str(scene), "--spp", "4", "--resolution-scale", "0.02", "--transfer-spp", "16",
+                 "--workdir", str(work), "--pbrt", str(pbrt), "--quiet"]) == 0
+    assert "best: " in capsys.readouterr().out
+    copy = (work / "scene.pbrt").read_text()
+    assert copy.count("Film ") == 1 and copy.index("Film ") < copy.index("WorldBegin")
+    assert '"integer xresolution" [ 26 ] "integer yresolution" [ 14 ]' in copy and '"spectral"' in copy
