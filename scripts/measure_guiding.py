@@ -13,9 +13,13 @@ pre-pass writes the mixtures' spectra, ``wavelength-pdf batch`` optimizes them, 
 them; the optimizer's seconds are reported apart, since its tables are cached by content and
 serve every later render of the scene), and the floor (emission sampling with
 ``--wavelength-repeats 8``: what is left when wavelength noise is all but gone, design §6.7).
+The renders run one at a time, the samplers alternating seed by seed; the CSV gives each
+sampler's CPU seconds (mean, least, most). ``--per-table`` breaks each sampler's error down by
+the guiding table of the pixels.
 
     .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3] [--size 80 60]
-        [--threads 1] [--out docs/guiding/measurement.csv] [--pictures docs/guiding]
+        [--threads 1] [--samplers ...] [--out docs/guiding/measurement.csv]
+        [--per-table docs/guiding/per-table.csv] [--pictures docs/guiding]
 """
 from __future__ import annotations
 
@@ -103,6 +107,35 @@ def pictures(where: Path, name: str, images: dict, index: np.ndarray, mask: np.n
     plt.close(fig)
 
 
+def table_shares(clusters: Path) -> dict[int, str]:
+    """Each guiding table's kind shares from the renderer's clusters.csv, as text
+    ('scene.pbrt:LINE 0.92; ...', a kind by its strongest light's line)."""
+    with open(clusters, newline="") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    return {int(r["table"]): "; ".join(f"{Path(k.removeprefix('share ')).name.rsplit(':', 1)[0]} {float(v):.2f}"
+                                       for k, v in r.items() if k.startswith("share "))
+            for r in rows}
+
+
+def per_table(name: str, a: argparse.Namespace, images: dict, index: np.ndarray, mask: np.ndarray,
+              shares: dict[int, str]) -> list[dict]:
+    """Each sampler's ``de2`` over the lit pixels of each guiding table (every guided render of
+    the scene uses the same tables' tiles: the pre-pass has its own seed), and its ratio to
+    guiding with emission tables there: where optimizing the mixtures pays and where it does not."""
+    rows = []
+    for k in range(int(index.max()) + 1):
+        pixels = mask & (index == k)
+        if not pixels.any():
+            continue
+        de2 = {s: float(np.mean([np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[pixels] ** 2) / 2
+                                 for i in range(a.pairs)])) for s, ims in images.items()}
+        for s, e in de2.items():
+            rows.append({"scene": name, "table": k, "shares": shares.get(k, ""), "lit_pixels": int(pixels.sum()),
+                         "sampler": s, "spp": a.spp,
+                         "de2": f"{e:.5g}", "de2_vs_guided_equal_spp": f"{e / de2['guided']:.3f}"})
+    return rows
+
+
 def table_index(path: Path) -> np.ndarray:
     import OpenEXR
 
@@ -125,9 +158,15 @@ def main() -> int:
                     "for (wavelength-pdf batch --reflectances): white (default), colorchecker, scene (the "
                     "scene's own materials) or a reflectance CSV")
     ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
+    ap.add_argument("--per-table", type=Path, metavar="CSV",
+                    help="write each sampler's de2 over each guiding table's pixels here")
     ap.add_argument("--scenes", nargs="+", default=list(SCENES), help="benchmark scenes (default: %(default)s)")
+    ap.add_argument("--samplers", nargs="+", default=list(SAMPLERS), choices=list(SAMPLERS),
+                    help="the samplers to render (default: all; emission and guided are always "
+                         "rendered, the ratios are taken against them)")
     a = ap.parse_args()
-    rows = []
+    samplers = {s: args for s, args in SAMPLERS.items() if s in {*a.samplers, "emission", "guided"}}
+    rows, per_table_rows = [], []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for name in a.scenes:
@@ -135,18 +174,24 @@ def main() -> int:
                                resolution=tuple(a.size))
             common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp)]
             guiding = tuple(a.guiding_args.split())
-            tables, optimizer_s = optimized_tables(a.pbrt, scene, common, guiding, tmp / name, a.threads,
-                                                  a.batch_args.split(), a.colours)
-            print(f"{name}: optimized {len(list(tables.glob('*.csv'))) - 1} mixture tables in "
-                  f"{optimizer_s:.1f} s", file=sys.stderr)
-            images, cpu, prepass, guide_bytes = {}, {}, {}, {}
-            for sampler, args in SAMPLERS.items():
-                if sampler.startswith("guided"):
-                    args = args + guiding
-                if sampler == "guided-optimized":
-                    args = args + ("--wavelength-guiding-tables", str(tables))
-                images[sampler], cpu[sampler] = [], []
-                for seed in range(1, 2 * a.pairs + 1):
+            tables, optimizer_s = None, float("nan")
+            if "guided-optimized" in samplers:
+                tables, optimizer_s = optimized_tables(a.pbrt, scene, common, guiding, tmp / name, a.threads,
+                                                      a.batch_args.split(), a.colours)
+                print(f"{name}: optimized {len(list(tables.glob('*.csv'))) - 1} mixture tables in "
+                      f"{optimizer_s:.1f} s", file=sys.stderr)
+            images = {sampler: [] for sampler in samplers}
+            cpu = {sampler: [] for sampler in samplers}
+            prepass, guide_bytes = {}, {}
+            # One render at a time, the samplers alternating seed by seed, so that a change in
+            # the machine's speed during the run falls on every sampler alike.
+            for seed in range(1, 2 * a.pairs + 1):
+                print(f"{name}: seed {seed} of {2 * a.pairs}", file=sys.stderr)
+                for sampler, args in samplers.items():
+                    if sampler.startswith("guided"):
+                        args = args + guiding
+                    if sampler == "guided-optimized":
+                        args = args + ("--wavelength-guiding-tables", str(tables))
                     out = tmp / f"{name}-{sampler}-{seed}.exr"
                     r = subprocess.run([str(a.pbrt), *common, "--seed", str(seed), "--outfile", str(out), *args,
                                         str(scene)],
@@ -161,6 +206,7 @@ def main() -> int:
                         guide_bytes[sampler] = int(h["wavelengthGuidingBytes"])
                     if sampler == "guided" and seed == 1:
                         index = table_index(out)
+                        shares = table_shares(out.with_suffix(".guiding") / "clusters.csv")
                         h = read_header(out)
                         print(f"{name}: guided with {h['wavelengthGuidingTables']} tables, "
                               f"{h['wavelengthGuidingKinds']} kinds, pre-pass "
@@ -170,6 +216,8 @@ def main() -> int:
             mask = lit_pixels(np.mean([im for ims in images.values() for im in ims], axis=0))
             if a.pictures:
                 pictures(a.pictures, name, images, index, mask)
+            if a.per_table:
+                per_table_rows += per_table(name, a, images, index, mask, shares)
             result = {}
             for sampler, ims in images.items():
                 de2 = [float(np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[mask] ** 2) / 2)
@@ -177,18 +225,20 @@ def main() -> int:
                 result[sampler] = (np.mean(de2), np.std(de2, ddof=1) / np.sqrt(a.pairs) if a.pairs > 1 else np.nan,
                                    float(np.mean(cpu[sampler])))
             e_em, _, t_em = result["emission"]
-            e_vis, _, t_vis = result["visible"]
             e_gd, _, t_gd = result["guided"]
-            floor = result["floor"][0]
+            floor = result["floor"][0] if "floor" in result else np.nan
             for sampler, (de2, se, t) in result.items():
                 rows.append({"scene": name, "sampler": sampler, "spp": a.spp, "size": f"{a.size[0]}x{a.size[1]}",
                              "pairs": a.pairs, "de2": f"{de2:.5g}", "de2_se": f"{se:.2g}", "cpu_s": f"{t:.3f}",
+                             # the spread of the 2 x PAIRS renders' CPU seconds
+                             "cpu_s_min": f"{min(cpu[sampler]):.3f}", "cpu_s_max": f"{max(cpu[sampler]):.3f}",
                              "de2_vs_emission_equal_spp": f"{de2 / e_em:.3f}",
                              "de2_vs_emission_equal_time": f"{equal_time_ratio(de2, t, e_em, t_em):.3f}",
-                             "de2_vs_visible_equal_time": f"{equal_time_ratio(de2, t, e_vis, t_vis):.3f}",
+                             "de2_vs_visible_equal_time": (f"{equal_time_ratio(de2, t, *result['visible'][::2]):.3f}"
+                                                           if "visible" in result else ""),
                              "de2_vs_guided_equal_time": f"{equal_time_ratio(de2, t, e_gd, t_gd):.3f}",
                              # the share of emission's error above the floor that is left
-                             "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}",
+                             "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}" if "floor" in result else "",
                              "optimizer_s": f"{optimizer_s:.1f}" if sampler == "guided-optimized" else "",
                              "colours": a.colours if sampler == "guided-optimized" else "",
                              # the pre-pass and the tables' share of the render's CPU time, and the
@@ -199,12 +249,13 @@ def main() -> int:
     w = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]))
     w.writeheader()
     w.writerows(rows)
-    if a.out:
-        a.out.parent.mkdir(parents=True, exist_ok=True)
-        with open(a.out, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+    for path, table in ((a.out, rows), (a.per_table, per_table_rows)):
+        if path:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with open(path, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=list(table[0]))
+                w.writeheader()
+                w.writerows(table)
     return 0
 
 
