@@ -20,10 +20,6 @@ import numpy as np
 
 from wavelength_pdf.evaluation import transfer
 
-#: The simple samplers, by the benchmark's names (design §1.7, §6.7).
-SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
-
-
 @dataclass(frozen=True)
 class Prediction:
     """One candidate's predicted image error (mean over lit pixels, squared CIEDE2000)."""
@@ -41,11 +37,12 @@ class Prediction:
 
 
 def simple_tables(spectrum) -> dict[str, object]:
-    """The simple samplers' tables for ``spectrum`` over the transfer's range."""
+    """The simple samplers' tables for ``spectrum`` over the transfer's range, named as
+    :data:`wavelength_pdf.stratified.METHODS` (the benchmark's names, design §1.7, §6.7)."""
     from wavelength_pdf import stratified
 
     out = {"uniform": stratified.uniform_table(transfer.LO, transfer.HI), "visible": stratified.visible_table()}
-    for w in ("spd", "luminance", "xyz"):
+    for w in stratified.WEIGHTS:
         out[w] = stratified.stratified_table(spectrum, w, transfer.LO, transfer.HI)
     return out
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from repo_paths import REPO
+from wavelength_pdf import stratified
 from wavelength_pdf.cli import main
 from wavelength_pdf.evaluation import choose
 from wavelength_pdf.table import read_table
@@ -30,7 +31,7 @@ def test_under_a_line_lamp_the_lamps_own_samplers_are_predicted_best(box_predict
     exactly as spd; the path noise is every candidate's."""
     preds, _ = box_predictions
     by = {p.name: p for p in preds}
-    assert set(by) == {*choose.SIMPLE, "copy-of-spd"}
+    assert set(by) == {*stratified.METHODS, "copy-of-spd"}
     assert [p.wavelength for p in preds] == sorted(p.wavelength for p in preds)
     assert by["copy-of-spd"].wavelength == by["spd"].wavelength
     assert max(by["spd"].wavelength, by["xyz"].wavelength) < 0.2 * min(by["uniform"].wavelength,
