@@ -80,16 +80,16 @@ def optimized_tables(pbrt: Path, scene: Path, common: list[str], guiding: tuple[
     return tables, time.perf_counter() - start
 
 
-def pictures(where: Path, name: str, images: dict, index: np.ndarray, mask: np.ndarray) -> None:
-    """The guided image, its table map and the seed-pair error maps of each sampler."""
+def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.ndarray, mask: np.ndarray) -> None:
+    """The mean image, its table map and each sampler's error map of its first seed pair
+    (``maps``: sampler -> per pair, the ΔE00 map)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    mean = np.mean([im for ims in images.values() for im in ims], axis=0)
-    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "floor") if s in images]
-    maps = {s: _delta_e(rgb_to_lab(images[s][0]), rgb_to_lab(images[s][1])) for s in shown}
-    top = float(np.percentile(np.concatenate([m[mask] for m in maps.values()]), 99))
+    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "floor") if s in maps]
+    first = {s: maps[s][0] for s in shown}
+    top = float(np.percentile(np.concatenate([m[mask] for m in first.values()]), 99))
     fig, axes = plt.subplots(1, 2 + len(shown), figsize=(3.2 * (2 + len(shown)), 3.0), constrained_layout=True)
     srgb = np.clip(mean / max(float(np.percentile(mean, 99)), 1e-12), 0, 1) ** (1 / 2.2)
     axes[0].imshow(srgb)
@@ -97,8 +97,8 @@ def pictures(where: Path, name: str, images: dict, index: np.ndarray, mask: np.n
     axes[1].imshow(index, cmap="tab20", interpolation="nearest", vmin=0, vmax=19)
     axes[1].set_title(f"table map: {int(index.max()) + 1} tables", fontsize=8)
     for ax, s in zip(axes[2:], shown):
-        im = ax.imshow(np.where(mask, maps[s], np.nan), cmap="magma", vmin=0, vmax=top)
-        ax.set_title(f"{s}: ΔE00 of a seed pair, mean {np.mean(maps[s][mask]):.2f}", fontsize=8)
+        im = ax.imshow(np.where(mask, first[s], np.nan), cmap="magma", vmin=0, vmax=top)
+        ax.set_title(f"{s}: ΔE00 of a seed pair, mean {np.mean(first[s][mask]):.2f}", fontsize=8)
     fig.colorbar(im, ax=axes[2:].tolist(), shrink=0.8, label="CIEDE2000")
     for ax in axes:
         ax.set_axis_off()
@@ -117,7 +117,7 @@ def table_shares(clusters: Path) -> dict[int, str]:
             for r in rows}
 
 
-def per_table(name: str, a: argparse.Namespace, images: dict, index: np.ndarray, mask: np.ndarray,
+def per_table(name: str, a: argparse.Namespace, maps: dict, index: np.ndarray, mask: np.ndarray,
               shares: dict[int, str]) -> list[dict]:
     """Each sampler's ``de2`` over the lit pixels of each guiding table (every guided render of
     the scene uses the same tables' tiles: the pre-pass has its own seed), and its ratio to
@@ -127,8 +127,7 @@ def per_table(name: str, a: argparse.Namespace, images: dict, index: np.ndarray,
         pixels = mask & (index == k)
         if not pixels.any():
             continue
-        de2 = {s: float(np.mean([np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[pixels] ** 2) / 2
-                                 for i in range(a.pairs)])) for s, ims in images.items()}
+        de2 = {s: float(np.mean([np.mean(m[pixels] ** 2) / 2 for m in pairs])) for s, pairs in maps.items()}
         for s, e in de2.items():
             rows.append({"scene": name, "table": k, "shares": shares.get(k, ""), "lit_pixels": int(pixels.sum()),
                          "sampler": s, "spp": a.spp,
@@ -199,29 +198,32 @@ def main() -> int:
                     if r.returncode != 0:
                         sys.exit(r.stderr)
                     images[sampler].append(read_rgb(out))
-                    cpu[sampler].append(float(read_header(out)["renderCPUSeconds"]))
+                    h = read_header(out)
+                    cpu[sampler].append(float(h["renderCPUSeconds"]))
                     if sampler.startswith("guided"):
-                        h = read_header(out)
                         prepass.setdefault(sampler, []).append(float(h["wavelengthGuidingCPUSeconds"]))
                         guide_bytes[sampler] = int(h["wavelengthGuidingBytes"])
                     if sampler == "guided" and seed == 1:
                         index = table_index(out)
                         shares = table_shares(out.with_suffix(".guiding") / "clusters.csv")
-                        h = read_header(out)
                         print(f"{name}: guided with {h['wavelengthGuidingTables']} tables, "
                               f"{h['wavelengthGuidingKinds']} kinds, pre-pass "
                               f"{h['wavelengthGuidingCPUSeconds']:.3f} s CPU", file=sys.stderr)
             # The lit pixels of the mean of every image (lamps seen directly left out, as the
             # benchmark does).
-            mask = lit_pixels(np.mean([im for ims in images.values() for im in ims], axis=0))
+            mean = np.mean([im for ims in images.values() for im in ims], axis=0)
+            mask = lit_pixels(mean)
+            # Each sampler's ΔE00 map of each seed pair, for the image's error, the pictures and
+            # the per-table errors alike.
+            maps = {sampler: [_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1])) for i in range(a.pairs)]
+                    for sampler, ims in images.items()}
             if a.pictures:
-                pictures(a.pictures, name, images, index, mask)
+                pictures(a.pictures, name, mean, maps, index, mask)
             if a.per_table:
-                per_table_rows += per_table(name, a, images, index, mask, shares)
+                per_table_rows += per_table(name, a, maps, index, mask, shares)
             result = {}
-            for sampler, ims in images.items():
-                de2 = [float(np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[mask] ** 2) / 2)
-                       for i in range(a.pairs)]
+            for sampler, pairs in maps.items():
+                de2 = [float(np.mean(m[mask] ** 2) / 2) for m in pairs]
                 result[sampler] = (np.mean(de2), np.std(de2, ddof=1) / np.sqrt(a.pairs) if a.pairs > 1 else np.nan,
                                    float(np.mean(cpu[sampler])))
             e_em, _, t_em = result["emission"]
