@@ -11,14 +11,16 @@ The samplers: pbrt-v4's visible sampling, whole-scene emission sampling (one tab
 with emission tables per mixture, guided with optimized tables per mixture (end to end: the
 pre-pass writes the mixtures' spectra, ``wavelength-pdf batch`` optimizes them, the render reads
 them; the optimizer's seconds are reported apart, since its tables are cached by content and
-serve every later render of the scene), and the floor (emission sampling with
+serve every later render of the scene), guided with the tables ``wavelength-pdf choose-guiding``
+keeps per mixture among its emission table and the optimized routes of ``--choose-from`` (the
+prediction's renders reported apart too, as ``choose_s``), and the floor (emission sampling with
 ``--wavelength-repeats 8``: what is left when wavelength noise is all but gone, design §6.7).
 The renders run one at a time, the samplers alternating seed by seed; the CSV gives each
 sampler's CPU seconds (mean, least, most). ``--per-table`` breaks each sampler's error down by
 the guiding table of the pixels.
 
     .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3] [--size 80 60]
-        [--threads 1] [--samplers ...] [--out docs/guiding/measurement.csv]
+        [--threads 1] [--samplers ...] [--choose-from white scene] [--out docs/guiding/measurement.csv]
         [--per-table docs/guiding/per-table.csv] [--pictures docs/guiding]
 """
 from __future__ import annotations
@@ -48,21 +50,28 @@ SAMPLERS = {
     "emission": ("--wavelength-sampling", "emission"),
     "guided": ("--wavelength-guiding",),
     "guided-optimized": ("--wavelength-guiding",),  # + --wavelength-guiding-tables, below
+    "guided-chosen": ("--wavelength-guiding",),     # the same, the tables choose-guiding kept
     "floor": ("--wavelength-sampling", "emission", "--wavelength-repeats", "8"),
 }
 
 
-def optimized_tables(pbrt: Path, scene: Path, common: list[str], guiding: tuple[str, ...], work: Path,
-                     threads: int, batch_args: list[str], colours: str = "white") -> tuple[Path, float]:
-    """The pre-pass's mixture spectra, optimized by ``wavelength-pdf batch`` for ``colours``
-    (design §4.5; ``scene``: the scene's own materials, ``pbrt --material-reflectances``):
-    (folder, seconds, the renderer's material listing included)."""
-    spectra, tables = work / "spectra", work / "tables"
+def mixture_spectra(pbrt: Path, scene: Path, common: list[str], guiding: tuple[str, ...], work: Path) -> Path:
+    """The pre-pass's mixture spectra, tile map and emission tables at the render's settings."""
+    spectra = work / "spectra"
     spectra.mkdir(parents=True, exist_ok=True)
     r = subprocess.run([str(pbrt), *common, "--wavelength-guiding", *guiding,
                         "--wavelength-guiding-spectra", str(spectra), str(scene)], capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(r.stderr)
+    return spectra
+
+
+def optimized_tables(pbrt: Path, scene: Path, spectra: Path, work: Path, threads: int, batch_args: list[str],
+                     colours: str = "white") -> tuple[Path, float]:
+    """The mixture spectra optimized by ``wavelength-pdf batch`` for ``colours`` (design §4.5;
+    ``scene``: the scene's own materials, ``pbrt --material-reflectances``): (folder, seconds,
+    the renderer's material listing included)."""
+    tables = work / f"tables-{Path(colours).stem}"
     start = time.perf_counter()
     if colours == "scene":
         materials = work / "materials.csv"
@@ -80,6 +89,19 @@ def optimized_tables(pbrt: Path, scene: Path, common: list[str], guiding: tuple[
     return tables, time.perf_counter() - start
 
 
+def chosen_tables(pbrt: Path, scene: Path, spectra: Path, routes: dict[str, Path], spp: int,
+                  work: Path) -> tuple[Path | None, float, str]:
+    """``wavelength-pdf choose-guiding`` over the optimized routes: (the folder, None when every
+    mixture keeps its emission table; seconds; each table's choice)."""
+    from wavelength_pdf.evaluation.guiding_choice import EMISSION, choose_guiding_tables
+
+    start = time.perf_counter()
+    choices = choose_guiding_tables(scene, spectra, routes, spp, work / "chosen", work / "transfer", pbrt=pbrt)
+    picks = " ".join(f"{c.table}:{c.chosen}" for c in choices)
+    kept = any(c.chosen != EMISSION for c in choices)
+    return (work / "chosen" if kept else None), time.perf_counter() - start, picks
+
+
 def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.ndarray, mask: np.ndarray) -> None:
     """The mean image, its table map and each sampler's error map of its first seed pair
     (``maps``: sampler -> per pair, the ΔE00 map)."""
@@ -87,7 +109,7 @@ def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.nda
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "floor") if s in maps]
+    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "guided-chosen", "floor") if s in maps]
     first = {s: maps[s][0] for s in shown}
     top = float(np.percentile(np.concatenate([m[mask] for m in first.values()]), 99))
     fig, axes = plt.subplots(1, 2 + len(shown), figsize=(3.2 * (2 + len(shown)), 3.0), constrained_layout=True)
@@ -156,6 +178,9 @@ def main() -> int:
     ap.add_argument("--colours", default="white", help="the surface colours the mixture tables are optimized "
                     "for (wavelength-pdf batch --reflectances): white (default), colorchecker, scene (the "
                     "scene's own materials) or a reflectance CSV")
+    ap.add_argument("--choose-from", nargs="+", default=["white", "scene"], metavar="COLOURS",
+                    help="guided-chosen: the optimized routes (as --colours) that wavelength-pdf choose-guiding "
+                         "chooses from, table by table, beside the emission tables (default: white scene)")
     ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
     ap.add_argument("--per-table", type=Path, metavar="CSV",
                     help="write each sampler's de2 over each guiding table's pixels here")
@@ -173,12 +198,23 @@ def main() -> int:
                                resolution=tuple(a.size))
             common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp)]
             guiding = tuple(a.guiding_args.split())
-            tables, optimizer_s = None, float("nan")
-            if "guided-optimized" in samplers:
-                tables, optimizer_s = optimized_tables(a.pbrt, scene, common, guiding, tmp / name, a.threads,
-                                                      a.batch_args.split(), a.colours)
-                print(f"{name}: optimized {len(list(tables.glob('*.csv'))) - 1} mixture tables in "
-                      f"{optimizer_s:.1f} s", file=sys.stderr)
+            tables, optimizer_s, chosen, choose_s, picks = None, float("nan"), None, float("nan"), ""
+            if {"guided-optimized", "guided-chosen"} & set(samplers):
+                spectra = mixture_spectra(a.pbrt, scene, common, guiding, tmp / name)
+                needed = ([a.colours] if "guided-optimized" in samplers else []) + \
+                    (a.choose_from if "guided-chosen" in samplers else [])
+                routes = {c: optimized_tables(a.pbrt, scene, spectra, tmp / name, a.threads, a.batch_args.split(), c)
+                          for c in dict.fromkeys(needed)}
+                for c, (folder, secs) in routes.items():
+                    print(f"{name}: optimized {len(list(folder.glob('mixture-*.csv')))} mixture tables for {c} in "
+                          f"{secs:.1f} s", file=sys.stderr)
+                if "guided-optimized" in samplers:
+                    tables, optimizer_s = routes[a.colours]
+                if "guided-chosen" in samplers:
+                    chosen, choose_s, picks = chosen_tables(a.pbrt, scene, spectra,
+                                                            {c: routes[c][0] for c in a.choose_from}, a.spp,
+                                                            tmp / name)
+                    print(f"{name}: choose-guiding in {choose_s:.1f} s: {picks}", file=sys.stderr)
             images = {sampler: [] for sampler in samplers}
             cpu = {sampler: [] for sampler in samplers}
             prepass, guide_bytes = {}, {}
@@ -191,6 +227,8 @@ def main() -> int:
                         args = args + guiding
                     if sampler == "guided-optimized":
                         args = args + ("--wavelength-guiding-tables", str(tables))
+                    if sampler == "guided-chosen" and chosen is not None:
+                        args = args + ("--wavelength-guiding-tables", str(chosen))
                     out = tmp / f"{name}-{sampler}-{seed}.exr"
                     r = subprocess.run([str(a.pbrt), *common, "--seed", str(seed), "--outfile", str(out), *args,
                                         str(scene)],
@@ -241,8 +279,15 @@ def main() -> int:
                              "de2_vs_guided_equal_time": f"{equal_time_ratio(de2, t, e_gd, t_gd):.3f}",
                              # the share of emission's error above the floor that is left
                              "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}" if "floor" in result else "",
-                             "optimizer_s": f"{optimizer_s:.1f}" if sampler == "guided-optimized" else "",
-                             "colours": a.colours if sampler == "guided-optimized" else "",
+                             "optimizer_s": (f"{optimizer_s:.1f}" if sampler == "guided-optimized" else
+                                             f"{sum(routes[c][1] for c in a.choose_from):.1f}"
+                                             if sampler == "guided-chosen" else ""),
+                             "colours": (a.colours if sampler == "guided-optimized" else
+                                         "+".join(a.choose_from) if sampler == "guided-chosen" else ""),
+                             # choose-guiding's seconds (its renders of the scene, cached like the
+                             # tables) and each table's choice
+                             "choose_s": f"{choose_s:.1f}" if sampler == "guided-chosen" else "",
+                             "choices": picks if sampler == "guided-chosen" else "",
                              # the pre-pass and the tables' share of the render's CPU time, and the
                              # guide's memory (tables + tile map) against the film's 32 bytes a pixel
                              "prepass_share": f"{np.mean(prepass[sampler]) / t:.4f}" if sampler in prepass else "",

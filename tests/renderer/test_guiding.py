@@ -191,8 +191,8 @@ def test_optimized_tables_end_to_end(pbrt, tmp_path):
     r = run(pbrt, "--quiet", "--spp", str(spp), *GUIDED, "--wavelength-guiding-spectra", str(spectra), str(scene))
     assert r.returncode == 0, r.stderr
     written = sorted(p.name for p in spectra.iterdir())
-    assert "clusters.txt" in written and all(n.startswith("mixture-") and n.endswith(".spd")
-                                             for n in written if n != "clusters.txt"), written
+    assert {"clusters.txt", "tiles.txt"} <= set(written) and all(
+        n.startswith("mixture-") and n.endswith(".spd") for n in written if not n.endswith(".txt")), written
     # The command the renderer's message advises.
     batch = subprocess.run([sys.executable, "-m", "wavelength_pdf", "batch", str(spectra), "-o", str(tables),
                             "--max-evals", "20", "--quiet"],
@@ -219,6 +219,8 @@ def test_optimized_tables_end_to_end(pbrt, tmp_path):
     # Every table the render used came from the optimized folder (the spectra were written at
     # the render's own settings, so every mixture hash matches), with the defensive share.
     folder = gpaths[0].with_suffix(".guiding")
+    # The tile map beside the mixtures is the render's own (the same pre-pass).
+    assert (spectra / "tiles.txt").read_text() == (folder / "tiles.csv").read_text()
     rows = [l.split(",") for l in (folder / "clusters.csv").read_text().splitlines() if not l.startswith("#")]
     source = rows[0].index("source")
     optimized = {p.name for p in tables.glob("mixture-*.csv")}

@@ -1,5 +1,7 @@
 """``wavelength-pdf choose SCENE.pbrt [TABLE.csv ...]``: which table for this scene, by its
-predicted image error (wavelength_pdf.evaluation.choose, design §6.8)."""
+predicted image error (wavelength_pdf.evaluation.choose, design §6.8); ``wavelength-pdf
+choose-guiding SCENE.pbrt SPECTRA [NAME=]TABLES...``: the same for each of wavelength guiding's
+mixtures (wavelength_pdf.evaluation.guiding_choice)."""
 from __future__ import annotations
 
 import argparse
@@ -45,6 +47,58 @@ def cmd_choose(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_choose_guiding(args: argparse.Namespace) -> int:
+    from wavelength_pdf.evaluation.guiding_choice import EMISSION, choose_guiding_tables
+
+    if not args.scene.is_file():
+        raise BadInput(f"{args.scene}: no such scene file")
+    if not 0 < args.resolution_scale <= 1:
+        raise BadInput(f"--resolution-scale must lie in (0, 1], not {args.resolution_scale:g}")
+    candidates = {}
+    for c in args.candidates:
+        name, _, folder = c.rpartition("=") if "=" in c else (Path(c).name, "", c)
+        if not name or name in candidates:
+            raise BadInput(f"{c!r}: give each folder of tables once, with a name of its own (NAME=FOLDER)")
+        candidates[name] = Path(folder)
+    workdir = args.workdir or out_folder() / "choose" / args.scene.resolve().parent.name / args.scene.stem
+    say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    try:
+        choices = choose_guiding_tables(args.scene, args.spectra, candidates, args.spp, args.output, workdir,
+                                        pixel_sampler=args.pixel_sampler, resolution=args.resolution_scale,
+                                        pbrt=args.pbrt, transfer_spp=args.transfer_spp, say=say)
+    except ValueError as e:
+        raise BadInput(str(e)) from None
+    names = [EMISSION, *candidates]
+    print(f"{args.scene} at {args.spp} spp ({args.pixel_sampler}): each guiding table's predicted mean squared "
+          "CIEDE2000 of its wavelengths over its pixels")
+    print("  table  pixels  " + "  ".join(f"{n:>10}" for n in names) + "  chosen")
+    for c in choices:
+        cells = "  ".join(f"{c.predicted[n]:10.4g}" if n in c.predicted else f"{'-':>10}" for n in names)
+        print(f"  {c.table:5d}  {c.pixels:6d}  {cells}  {c.chosen}")
+    kept = sum(c.chosen != EMISSION for c in choices)
+    print(f"wrote {args.output}: {kept} optimized table(s) of {len(choices)} and choice.csv")
+    if not kept:
+        print("every table keeps its emission table: render without --wavelength-guiding-tables")
+    return 0
+
+
+def _prediction_options(c, resolution: float) -> None:
+    """The options of the prediction's renders, shared by choose and choose-guiding."""
+    c.add_argument("--spp", type=positive_int, default=64, help="the samples per pixel you render at (a power of "
+                   "two with the low-discrepancy sampler; default 64)")
+    c.add_argument("--pixel-sampler", choices=("sobol", "independent"), default="sobol",
+                   help="your pixel sampler: low-discrepancy (pbrt-v4's sobol and zsobol samplers; default) "
+                        "or independent")
+    c.add_argument("--resolution-scale", type=float, default=resolution, metavar="F",
+                   help=f"the renders' film size as a share of the scene's (default {resolution:g})")
+    c.add_argument("--transfer-spp", type=positive_int, default=1024, metavar="N",
+                   help="samples per pixel of the spectral render (default 1024)")
+    c.add_argument("--workdir", type=Path, default=None, metavar="DIR",
+                   help="where the renders go, kept for the next run (default out/choose/FOLDER/SCENE)")
+    c.add_argument("--pbrt", type=Path, default=None, help="the renderer (default: as design §7)")
+    c.add_argument("--quiet", action="store_true", help="no progress messages")
+
+
 def add_parser(sub) -> None:
     c = sub.add_parser(
         "choose", formatter_class=Formatter,
@@ -59,19 +113,29 @@ def add_parser(sub) -> None:
                     "more than 10 % (docs/benchmark.md).")
     c.add_argument("scene", type=Path, metavar="SCENE.pbrt", help="a pbrt-v4 scene lit by one kind of light")
     c.add_argument("tables", type=Path, nargs="*", metavar="TABLE.csv", help="tables to compare (design §2)")
-    c.add_argument("--spp", type=positive_int, default=64, help="the samples per pixel you render at (a power of "
-                   "two with the low-discrepancy sampler; default 64)")
-    c.add_argument("--pixel-sampler", choices=("sobol", "independent"), default="sobol",
-                   help="your pixel sampler: low-discrepancy (pbrt-v4's sobol and zsobol samplers; default) "
-                        "or independent")
     c.add_argument("--no-simple", action="store_true", help="compare the given tables only")
     c.add_argument("-o", "--output", type=Path, default=None, metavar="BEST.csv", help="write the best table here")
-    c.add_argument("--resolution-scale", type=float, default=0.1, metavar="F",
-                   help="the renders' film size as a share of the scene's (default 0.1)")
-    c.add_argument("--transfer-spp", type=positive_int, default=1024, metavar="N",
-                   help="samples per pixel of the spectral render (default 1024)")
-    c.add_argument("--workdir", type=Path, default=None, metavar="DIR",
-                   help="where the renders go, kept for the next run (default out/choose/FOLDER/SCENE)")
-    c.add_argument("--pbrt", type=Path, default=None, help="the renderer (default: as design §7)")
-    c.add_argument("--quiet", action="store_true", help="no progress messages")
+    _prediction_options(c, 0.1)
     c.set_defaults(func=cmd_choose, extra="evaluation")
+
+    g = sub.add_parser(
+        "choose-guiding", formatter_class=Formatter,
+        help="for each of wavelength guiding's mixtures, its emission table or an optimized one, by the "
+             "predicted image error over the pixels it lights",
+        description="Wavelength guiding (pbrt --wavelength-guiding) gives each tile the table of its light "
+                    "mixture. This predicts, for each mixture, the image error over the pixels it lights "
+                    "(design §6.8, the scene relit by the mixture) of its emission table and of each folder's "
+                    "optimized table, as the renderer samples them (defensive share included), and writes "
+                    "the winners to OUT for pbrt --wavelength-guiding-tables OUT (mixtures whose emission "
+                    "table wins have no file there) with OUT/choice.csv. SPECTRA is the folder pbrt "
+                    "--wavelength-guiding --wavelength-guiding-spectra SPECTRA wrote at the render's own "
+                    "settings; the TABLES folders are wavelength-pdf batch SPECTRA -o TABLES outputs "
+                    "(e.g. optimized for the white surface and for the scene's materials). docs/guiding.md.")
+    g.add_argument("scene", type=Path, metavar="SCENE.pbrt", help="the pbrt-v4 scene")
+    g.add_argument("spectra", type=Path, metavar="SPECTRA", help="the folder --wavelength-guiding-spectra wrote")
+    g.add_argument("candidates", nargs="+", metavar="[NAME=]TABLES",
+                   help="folders of optimized mixture tables (mixture-HASH.csv), named by NAME or the folder's name")
+    g.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                   help="the folder to write (replaced when it holds an earlier choice)")
+    _prediction_options(g, 0.5)
+    g.set_defaults(func=cmd_choose_guiding, extra="evaluation")

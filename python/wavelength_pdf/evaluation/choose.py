@@ -47,6 +47,19 @@ def simple_tables(spectrum) -> dict[str, object]:
     return out
 
 
+def check_spp(spp: int, pixel_sampler: str) -> None:
+    """ValueError unless the prediction models ``spp`` with ``pixel_sampler``."""
+    from wavelength_pdf import predict as P
+
+    if spp < 1:
+        raise ValueError(f"spp must be at least 1, not {spp}")
+    if pixel_sampler not in P.PIXEL_SAMPLERS:
+        raise ValueError(f"pixel sampler must be one of {P.PIXEL_SAMPLERS}, not {pixel_sampler!r}")
+    if pixel_sampler == "sobol" and P.U_POINTS % spp:
+        raise ValueError(f"spp {spp} is not a power of two up to {P.U_POINTS}: the low-discrepancy sampler's "
+                         "strata are modelled at powers of two (use --pixel-sampler independent otherwise)")
+
+
 def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,
                    pixel_sampler: str = "sobol", resolution: float = 0.1, pbrt: Path | None = None,
                    transfer_spp: int = transfer.SPP, simple: bool = True,
@@ -59,13 +72,7 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
     are unchanged."""
     from wavelength_pdf import predict as P
 
-    if spp < 1:
-        raise ValueError(f"spp must be at least 1, not {spp}")
-    if pixel_sampler not in P.PIXEL_SAMPLERS:
-        raise ValueError(f"pixel sampler must be one of {P.PIXEL_SAMPLERS}, not {pixel_sampler!r}")
-    if pixel_sampler == "sobol" and P.U_POINTS % spp:
-        raise ValueError(f"spp {spp} is not a power of two up to {P.U_POINTS}: the low-discrepancy sampler's "
-                         "strata are modelled at powers of two (use --pixel-sampler independent otherwise)")
+    check_spp(spp, pixel_sampler)
     spectrum = transfer.one_kind(scene)
     cands = dict(simple_tables(spectrum)) if simple else {}
     for name, table in tables.items():

@@ -559,6 +559,21 @@ WavelengthGuide BuildWavelengthGuide(const Scene &scene, const GuidingSettings &
 
 // ---- Output -------------------------------------------------------------------------------------
 
+// The table of every tile, one row per row of tiles, after a comment line naming the tile size
+// and the film's pixel bounds (tiles.csv beside an image, tiles.txt beside the mixtures).
+static std::string TilesText(const WavelengthGuide &g) {
+    std::ostringstream tiles;
+    tiles << "# wavelength guiding: the table of each tile of " << g.tile << "x" << g.tile
+          << " pixels, one row per row of tiles, from the film's pixel bounds " << g.bounds.pMin.x << " "
+          << g.bounds.pMin.y << " " << g.bounds.pMax.x << " " << g.bounds.pMax.y << "\n";
+    for (int ty = 0; ty < g.tilesY; ++ty) {
+        for (int tx = 0; tx < g.tilesX; ++tx)
+            tiles << (tx ? "," : "") << int(g.tileIndex[size_t(ty) * size_t(g.tilesX) + size_t(tx)]);
+        tiles << "\n";
+    }
+    return tiles.str();
+}
+
 void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &g, const std::string &source) {
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) {
@@ -577,6 +592,18 @@ void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &g, const
         WriteTextAtomically(p, text);
     }
     WriteTextAtomically(fs::path(dir) / "clusters.txt", ClustersText(g, false));  // not a spectrum: .txt
+    WriteTextAtomically(fs::path(dir) / "tiles.txt", TilesText(g));  // the tile map, for choose-guiding
+    // What choose-guiding predicts with: each table as this run samples it and the defensive
+    // spectrum every table is mixed with (.txt: not spectra for batch to optimize).
+    for (size_t k = 0; k < g.tables.size(); ++k)
+        WriteTextAtomically(fs::path(dir) / ("table-" + std::to_string(k) + ".txt"), TableText(g, k));
+    std::ostringstream d;
+    d.precision(17);
+    d << "# wavelength guiding's defensive spectrum (design section 1.8): the scene's whole emission, "
+         "integral 1, mixed into every table at the share below\n"
+         "# defensive share " << g.settings.defensive
+      << "\n" << MixtureSpectrumText(g.kinds, SceneSpectrum(g.kinds));
+    WriteTextAtomically(fs::path(dir) / "defensive.txt", d.str());
 }
 
 std::string GuidingOutputDir(const std::string &imagePath) {
@@ -605,16 +632,7 @@ void WriteGuidingOutputs(const std::string &imagePath, const WavelengthGuide &g,
             kinds << k << "," << Label(g.kinds.labels[k]) << "," << g.kinds.lights[k] << ","
                   << g.kinds.luminance[k] / sum << "\n";
         WriteTextAtomically(tmp / "kinds.csv", kinds.str());
-        std::ostringstream tiles;
-        tiles << "# wavelength guiding: the table of each tile of " << g.tile << "x" << g.tile
-              << " pixels, one row per row of tiles, from the film's pixel bounds " << g.bounds.pMin.x << " "
-              << g.bounds.pMin.y << " " << g.bounds.pMax.x << " " << g.bounds.pMax.y << "\n";
-        for (int ty = 0; ty < g.tilesY; ++ty) {
-            for (int tx = 0; tx < g.tilesX; ++tx)
-                tiles << (tx ? "," : "") << int(g.tileIndex[size_t(ty) * size_t(g.tilesX) + size_t(tx)]);
-            tiles << "\n";
-        }
-        WriteTextAtomically(tmp / "tiles.csv", tiles.str());
+        WriteTextAtomically(tmp / "tiles.csv", TilesText(g));
         // Into place: an earlier folder of the same name goes only once the new one is complete.
         const fs::path old = dir.string() + ".old" + std::to_string(getpid());
         if (fs::exists(dir, ec)) {

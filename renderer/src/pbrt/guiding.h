@@ -158,8 +158,11 @@ std::string MixtureSpectrumText(const LightKinds &kinds, const std::vector<doubl
 
 // --wavelength-guiding-spectra DIR: writes DIR/mixture-<hash>.spd for every table (a file
 // already there with the same numbers is left alone, so an optimizer's cache keyed by it stays
-// valid) and DIR/clusters.txt (CSV text, named so that `wavelength-pdf batch DIR`, which reads
-// .csv, .spd and .pbrt files, optimizes the spectra alone); creates DIR when missing. Throws PbrtError on failure.
+// valid), DIR/clusters.txt and DIR/tiles.txt (CSV text, named so that `wavelength-pdf batch
+// DIR`, which reads .csv, .spd and .pbrt files, optimizes the spectra alone; tiles.txt is the
+// tiles.csv of WriteGuidingOutputs), DIR/table-<k>.txt (each table as this run samples it) and
+// DIR/defensive.txt (the scene's emission every table is mixed with, and the share S, in a
+// comment line); creates DIR when missing. Throws PbrtError on failure.
 void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &guide, const std::string &source);
 
 // Beside the image OUT.ext: OUT.guiding/ with table-<k>.csv (each table as sampled, design §2

@@ -103,9 +103,10 @@ Wavelengths (four per path from one random number):
                                mixed with the defensive share
   --wavelength-guiding-spectra DIR
                                render nothing: run the pre-pass and write each table's
-                               mixture spectrum to DIR/mixture-HASH.spd (and clusters.txt);
-                               give the render's own --spp, resolution and --guiding-*
-                               options, so that the render chooses the same mixtures
+                               mixture spectrum to DIR/mixture-HASH.spd (and clusters.txt,
+                               tiles.txt, table-K.txt, defensive.txt for wavelength-pdf
+                               choose-guiding); give the render's own --spp, resolution and
+                               --guiding-* options, so that the render chooses the same mixtures
   --wavelength-repeats K       trace each camera sample K times with the same random
                                numbers but the wavelength number shifted by k/K, and
                                average: wavelength noise averaged away at K times the cost
