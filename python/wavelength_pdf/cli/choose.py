@@ -54,6 +54,8 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
         raise BadInput(f"{args.scene}: no such scene file")
     if not 0 < args.resolution_scale <= 1:
         raise BadInput(f"--resolution-scale must lie in (0, 1], not {args.resolution_scale:g}")
+    if not 0 <= args.margin < 1:
+        raise BadInput(f"--margin must lie in [0, 1), not {args.margin:g}")
     candidates = {}
     for c in args.candidates:
         name, _, folder = c.rpartition("=") if "=" in c else (Path(c).name, "", c)
@@ -64,7 +66,8 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     try:
         choices = choose_guiding_tables(args.scene, args.spectra, candidates, args.spp, args.output, workdir,
-                                        pixel_sampler=args.pixel_sampler, resolution=args.resolution_scale,
+                                        margin=args.margin, pixel_sampler=args.pixel_sampler,
+                                        resolution=args.resolution_scale,
                                         pbrt=args.pbrt, transfer_spp=args.transfer_spp, say=say)
     except ValueError as e:
         raise BadInput(str(e)) from None
@@ -137,5 +140,9 @@ def add_parser(sub) -> None:
                    help="folders of optimized mixture tables (mixture-HASH.csv), named by NAME or the folder's name")
     g.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="the folder to write (replaced when it holds an earlier choice)")
+    g.add_argument("--margin", type=float, default=0.1, metavar="F",
+                   help="keep an optimized table only where its predicted error is below (1 - F) times the "
+                        "emission table's (default 0.1: the prediction is an approximation in scenes with "
+                        "several kinds of light)")
     _prediction_options(g, 0.5)
     g.set_defaults(func=cmd_choose_guiding, extra="evaluation")

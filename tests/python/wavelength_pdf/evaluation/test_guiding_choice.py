@@ -103,7 +103,9 @@ def test_each_table_gets_its_least_prediction(setup):
     for c in choices:
         assert set(c.predicted) == {G.EMISSION, *folders}
         assert all(v > 0 and np.isfinite(v) for v in c.predicted.values())
-        assert c.predicted[c.chosen] == min(c.predicted.values())
+        best = min((n for n in c.predicted if n != G.EMISSION), key=c.predicted.get)
+        wins = c.predicted[best] < 0.9 * c.predicted[G.EMISSION]  # the default margin, 0.1
+        assert c.chosen == (best if wins else G.EMISSION), c
         # four equal-width bands cannot follow a fluorescent's or sodium lamp's lines
         assert c.chosen != "uniform" and c.predicted["uniform"] > c.predicted[G.EMISSION]
     assert sum(c.pixels for c in choices) > 0
@@ -114,6 +116,24 @@ def test_each_table_gets_its_least_prediction(setup):
     with open(out / G.CHOICE, newline="") as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert [(int(r["table"]), r["chosen"]) for r in rows] == [(c.table, c.chosen) for c in choices]
+
+
+def test_the_margin_decides_between_emission_and_the_best_candidate(setup, pbrt, tmp_path):
+    """No margin: each table's least prediction; a margin near 1: every table keeps its emission
+    table, and the folder holds choice.csv alone. The predictions do not depend on the margin."""
+    scene, spectra, folders, _, choices, tmp = setup
+    for margin in (0.0, 0.999):
+        out = tmp_path / f"margin-{margin}"
+        again = G.choose_guiding_tables(scene, spectra, folders, 16, out, tmp / "work", margin=margin,
+                                        resolution=0.5, pbrt=pbrt, transfer_spp=128)
+        assert [c.predicted for c in again] == [c.predicted for c in choices]
+        for c in again:
+            least = min(c.predicted, key=lambda n: (c.predicted[n], n != G.EMISSION))
+            assert c.chosen == (least if margin == 0 else G.EMISSION)
+        if margin:
+            assert [p.name for p in out.iterdir()] == [G.CHOICE]
+    with pytest.raises(ValueError, match="margin"):
+        G.choose_guiding_tables(scene, spectra, folders, 16, tmp_path / "m", tmp / "work", margin=1.0)
 
 
 def test_the_renderer_takes_the_choice(setup, pbrt, tmp_path):
