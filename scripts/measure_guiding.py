@@ -132,11 +132,11 @@ def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.nda
 def table_shares(clusters: Path) -> dict[int, str]:
     """Each guiding table's kind shares from the renderer's clusters.csv, as text
     ('scene.pbrt:LINE 0.92; ...', a kind by its strongest light's line)."""
-    with open(clusters, newline="") as f:
-        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    from wavelength_pdf.evaluation.guiding_choice import cluster_rows
+
     return {int(r["table"]): "; ".join(f"{Path(k.removeprefix('share ')).name.rsplit(':', 1)[0]} {float(v):.2f}"
                                        for k, v in r.items() if k.startswith("share "))
-            for r in rows}
+            for r in cluster_rows(clusters)}
 
 
 def per_table(name: str, a: argparse.Namespace, maps: dict, index: np.ndarray, mask: np.ndarray,

@@ -60,6 +60,19 @@ def check_spp(spp: int, pixel_sampler: str) -> None:
                          "strata are modelled at powers of two (use --pixel-sampler independent otherwise)")
 
 
+def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pixel_sampler: str = "sobol",
+                     pixels: np.ndarray | slice = slice(None)) -> float:
+    """The mean over ``tr``'s lit pixels (or those ``pixels`` selects) of each pixel's predicted
+    squared CIEDE2000 of its wavelength sampling with ``table`` under ``spectrum``
+    (:func:`wavelength_pdf.predict.pixel_de2`, with its incoherence and dispersion)."""
+    from wavelength_pdf import predict as P
+
+    pc = P.basis_path_colours(table, spectrum, basis)
+    one = P.one_wavelength_covariance(table, spectrum, basis)
+    return float(np.mean(P.pixel_de2(pc, tr.t[pixels], spp, pixel_sampler, incoherence=tr.incoherence[pixels],
+                                     terminated=tr.terminated[pixels], one_wavelength=one)))
+
+
 def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,
                    pixel_sampler: str = "sobol", resolution: float = 0.1, pbrt: Path | None = None,
                    transfer_spp: int = transfer.SPP, simple: bool = True,
@@ -86,11 +99,9 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
     out, path = [], None
     for name, table in cands.items():
         say(f"choose: predicting {name}")
-        pc = P.basis_path_colours(table, spectrum, basis)
-        one = P.one_wavelength_covariance(table, spectrum, basis)
-        w = float(np.mean(P.pixel_de2(pc, tr.t, spp, pixel_sampler, incoherence=tr.incoherence,
-                                      terminated=tr.terminated, one_wavelength=one)))
+        w = wavelength_error(table, spectrum, basis, tr, spp, pixel_sampler)
         if path is None:
+            pc = P.basis_path_colours(table, spectrum, basis)
             path = float(np.mean(P.path_de2(tr.t @ pc.target, tr.incoherence, spp)))
         out.append(Prediction(name, table, w, path))
     return sorted(out, key=lambda p: p.wavelength)

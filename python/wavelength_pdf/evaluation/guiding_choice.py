@@ -65,12 +65,12 @@ class TileMap:
         """The table of each pixel of an image of ``shape`` (h, w) that spans the bounds (a
         rescaled render of the same film): the tile under each pixel's centre."""
         x0, y0, x1, y1 = self.bounds
+
+        def tiles(n: int, extent: int, count: int) -> np.ndarray:  # pixel centres, from the bounds' corner
+            return np.clip(((np.arange(n) + 0.5) * extent / n // self.tile).astype(int), 0, count - 1)
+
         h, w = shape
-        px = x0 + (np.arange(w) + 0.5) * (x1 - x0) / w
-        py = y0 + (np.arange(h) + 0.5) * (y1 - y0) / h
-        tx = np.clip(((px - x0) // self.tile).astype(int), 0, self.index.shape[1] - 1)
-        ty = np.clip(((py - y0) // self.tile).astype(int), 0, self.index.shape[0] - 1)
-        return self.index[np.ix_(ty, tx)]
+        return self.index[np.ix_(tiles(h, y1 - y0, self.index.shape[0]), tiles(w, x1 - x0, self.index.shape[1]))]
 
 
 def read_tiles(path: str | Path) -> TileMap:
@@ -131,11 +131,17 @@ def with_defensive(table, lam: np.ndarray, phi: np.ndarray, S: float):
     return Table(grid, normalize(grid, pdfs), list(table.comments))
 
 
+def cluster_rows(path: str | Path) -> list[dict[str, str]]:
+    """The rows of a guiding cluster list (``clusters.txt`` beside the mixtures, ``clusters.csv``
+    beside an image: design §5.2), its comment lines skipped."""
+    with open(path, newline="") as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
 def read_clusters(path: str | Path) -> dict[int, str]:
     """``clusters.txt``: each table's mixture name (``mixture-HASH``)."""
     path = Path(path)
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    rows = cluster_rows(path)
     try:
         return {int(r["table"]): r["mixture"] for r in rows}
     except (KeyError, TypeError, ValueError):
@@ -167,7 +173,7 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     optimized ones and ``choice.csv`` to ``out`` (replaced whole, never left half written),
     and return the choices. Every input is read and checked before the renders."""
     from wavelength_pdf import predict as P
-    from wavelength_pdf.evaluation.choose import check_spp
+    from wavelength_pdf.evaluation.choose import check_spp, wavelength_error
     from wavelength_pdf.spectra import read_spd
     from wavelength_pdf.table import read_table
 
@@ -196,10 +202,11 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     for k, mix in mixtures.items():
         lamps[k] = read_spd(spectra / f"{mix}.spd", transfer.LO, transfer.HI)
         own = spectra / f"table-{k}.txt"
-        if not own.is_file() or "# source: stratified" not in own.read_text():
+        emission = read_table(own) if own.is_file() else None
+        if emission is None or not any(c.strip().startswith("source: stratified") for c in emission.comments):
             raise ValueError(f"{own}: missing or not an emission table (write the folder without "
                              "--wavelength-guiding-tables)")
-        tables[k] = {EMISSION: read_table(own)}
+        tables[k] = {EMISSION: emission}
         for name, folder in candidates.items():
             path = Path(folder) / f"{mix}.csv"
             if path.is_file():  # read (and refused) before any render
@@ -220,11 +227,7 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         predicted = {}
         for name, table in tables[k].items():
             say(f"choose-guiding: table {k} ({mix}), predicting {name}")
-            pc = P.basis_path_colours(table, lamps[k], basis)
-            one = P.one_wavelength_covariance(table, lamps[k], basis)
-            predicted[name] = float(np.mean(P.pixel_de2(
-                pc, tr.t[sel], spp, pixel_sampler, incoherence=tr.incoherence[sel],
-                terminated=tr.terminated[sel], one_wavelength=one)))
+            predicted[name] = wavelength_error(table, lamps[k], basis, tr, spp, pixel_sampler, sel)
         best = min((n for n in predicted if n != EMISSION), key=predicted.get, default=EMISSION)
         chosen = best if predicted[best] < (1 - margin) * predicted[EMISSION] else EMISSION
         choices.append(MixtureChoice(k, mix, int(pixels.sum()), predicted, chosen))
