@@ -26,7 +26,7 @@ import numpy as np
 from . import aot, colorimetry, sampling
 from .problem import Problem
 from .quadrature import ORDER, ORDER_FINE, SEARCH_ORDER, gauss_legendre, normalized, table_estimate, table_quadrature
-from .second_moment import diag_second_moment
+from .second_moment import diag_second_moment, weighted_second_moment
 
 Array = jax.Array
 
@@ -69,7 +69,37 @@ def stratified_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_ex
     return _mean_over_colours(arr, jax.vmap(one)(C, D, diag, arr["strata_metric"]))
 
 
-def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Array, u: Array):
+def pixel_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: Array, dispersed: Array) -> Array:
+    """The ``pixels`` objective (design §4.6): sqrt(N V), V the predicted mean squared
+    CIEDE2000 over a scene's pixels of their means of N samples, the surface colours being a
+    hat basis of the pixels' spectra (:func:`wavelength_pdf.predict.pixel_de2`, made linear in
+    the basis' covariances by :func:`wavelength_pdf.predict.pixel_weights`):
+
+        V = tr(W_s M_s) + tr(W_i M_i) + tr(W_1 O),
+
+    M_s = S / N - sum_i m_i m_i' (stratified), M_i = (S - m m') / N (independent), with
+    S = E[C C'] across every colour and channel and m_i its strata's integrals of C, as
+    :func:`stratified_value` for one colour (S's diagonal takes the exact part);
+    O = 4 ∫ f f' / M dλ - c c', one path that kept one wavelength, whose weighted
+    integral ``dispersed`` = ∫ f' W_1 f / M is exact (``second_moment``).
+    """
+    n = arr["strata"].shape[0] + 1
+    idx = jnp.clip(jnp.floor(u * n).astype(jnp.int32), 0, n - 1)
+    K = C.shape[0]
+    Cf = jnp.moveaxis(C, 0, 1).reshape(-1, 3 * K)  # (points, K * 3), colour-major
+    Df = jnp.moveaxis(D, 0, 1).reshape(-1, 3 * K)
+    S = Cf.T @ (wt[:, None] * Cf)
+    S = S + jnp.diag(diag_exact.reshape(-1) - jnp.sum(wt[:, None] * Df, axis=0))
+    m = jax.ops.segment_sum(wt[:, None] * Cf, idx, num_segments=n)  # (n, K * 3)
+    mean = jnp.sum(m, axis=0)
+    c = arr["c"].reshape(-1)
+    V = (jnp.sum(arr["pixel_ws"] * (S / n - m.T @ m)) + jnp.sum(arr["pixel_wi"] * (S - jnp.outer(mean, mean))) / n
+         + 4.0 * dispersed - c @ arr["pixel_w1"] @ c)
+    return jnp.sqrt(jnp.maximum(n * V, 0.0))
+
+
+def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Array, u: Array,
+                      dispersed: Array | float = 0.0):
     """J, E[C] and E[(C - c)^2] (per channel); J is the ``stratified`` value instead where
     the problem stands for it (design §4.6).
 
@@ -88,7 +118,9 @@ def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Arra
         cross = jnp.sum(wt[:, None] * (C * C - D), axis=-2)
     c = arr["c"]
     m2 = diag_exact + cross - 2.0 * c * m1 + c * c
-    if stratified:
+    if "pixel_ws" in arr:
+        J = pixel_value(arr, u, wt, C, D, diag_exact, dispersed)
+    elif stratified:
         J = stratified_value(arr, u, wt, C, D, diag_exact)
     return J, m1, m2
 
@@ -96,7 +128,9 @@ def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Arra
 def _table_moments(P: Array, arr: dict, glx: Array, glw: Array):
     u, wt, C, D = table_quadrature(P, arr, glx, glw)
     PN = jax.vmap(lambda p: sampling.normalize(arr["grid"], p))(P)
-    return estimator_moments(arr, wt, C, D, diag_second_moment(arr, jnp.sum(PN, axis=0)), u)
+    msum = jnp.sum(PN, axis=0)
+    dispersed = weighted_second_moment(arr, msum, arr["pixel_w1"]) if "pixel_w1" in arr else 0.0
+    return estimator_moments(arr, wt, C, D, diag_second_moment(arr, msum), u, dispersed)
 
 
 def penalized(P: Array, arr: dict, glx: Array, glw: Array, var_ref: Array, mu: Array, margin: Array):

@@ -192,6 +192,55 @@ def optimize_spectrum(
 
 
 @float64
+def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres: np.ndarray, spp: int, *,
+                        incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
+                        max_evaluations: int = REFINE_EVALUATIONS,
+                        progress: Callable[[int, float], None] | None = None) -> Result:
+    """Polish ``table`` (e.g. the lamp's J table, or its emission table) on its own grid for
+    the image a scene shows at ``spp``: the ``pixels`` objective (design §4.6), whose value
+    is the predicted mean squared CIEDE2000 of the wavelength noise over the pixels whose
+    spectral transfers are ``t`` (P, B) at the hat basis' ``centres``
+    (:mod:`wavelength_pdf.evaluation.transfer`, in the image's units), with their
+    ``incoherence`` and dispersed share ``terminated`` (:func:`wavelength_pdf.predict.pixel_de2`).
+
+    The search is :func:`wavelength_pdf.solvers.refine`'s polish of the given table (and of
+    the equal-mass initialization where that is already better by this objective), at most
+    ``max_evaluations``; the result is judged by §4.4's rules in this objective's values, so
+    it is never worse than the initialization by it. The result's J figures are sqrt(N V),
+    V the predicted mean de2 (:func:`wavelength_pdf.evaluation.choose.wavelength_error`).
+    """
+    from .predict import hat_basis, lit_basis, pixel_weights
+    from .solvers import SolverResult
+
+    check_objective("pixels", spp)
+    t0 = time.monotonic()
+    enable_compilation_cache()
+    grid = np.asarray(table.grid, dtype=np.float64)
+    centres = np.asarray(centres, dtype=np.float64)
+    t = np.atleast_2d(np.asarray(t, dtype=np.float64))
+    if t.shape[1] != centres.size:
+        raise ValueError(f"t has {t.shape[1]} coefficients per pixel, the basis {centres.size} centres")
+    lit, basis = lit_basis(spectrum, hat_basis(centres, float(grid[0]), float(grid[-1])), float(grid[0]), float(grid[-1]))
+    problem = make_problem(spectrum, grid, basis)
+    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated)
+    problem = with_objective(problem, "pixels", spp, W)
+    start = Start.of(problem, init_mod.equal_mass_partition(problem))
+    P_from = normalize_density(grid, table.pdfs)
+    found = SolverResult(P=P_from, J=objective_mod.J(problem, P_from), message="from the given table")
+    with single_threaded_blas():
+        run = refine(start, found, Budget.starting(max_evaluations, None, t0), progress=progress)
+    result = Result.judge(
+        Table(grid=grid.copy(), pdfs=run.P), J=run.J, J_fine=objective_mod.J(problem, run.P, ORDER_FINE),
+        J_uniform=start.J_uniform, J_init=start.J,
+        health=run.health if run.health is not None else health_mod.health(problem, run.P),
+        health_init=start.health, name=getattr(spectrum, "name", ""),
+        source=f"{getattr(spectrum, 'source', '')}; pixels: {t.shape[0]} of a scene", solver="polish", seed=0,
+        history=list(run.history), message=run.message, objective=objective_label("pixels", spp))
+    result.seconds = time.monotonic() - t0
+    return result
+
+
+@float64
 def starting_table(spectrum, *, grid: np.ndarray | str = "auto", reflectances=None) -> Table:
     """The table :func:`optimize_spectrum` starts from for ``spectrum``: the equal-mass
     partition of I (x + y + z) (:func:`wavelength_pdf.init.equal_mass_partition`) on the grid

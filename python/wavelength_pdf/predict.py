@@ -285,11 +285,24 @@ def basis_path_colours(table, spectrum, basis, points: int = U_POINTS) -> PathCo
     instead of being refused as a surface that reflects nothing of the lamp (the objective's
     rule for surface colours, design §4.5). The weights are the basis'; J is that of the
     functions the lamp lights."""
+    lit, sub = lit_basis(spectrum, basis, float(table.grid[0]), float(table.grid[-1]))
+    if lit.size == len(basis.labels):
+        return path_colours(table, spectrum, basis, points)
+    pc = path_colours(table, spectrum, sub, points)
+    C = np.zeros((len(basis.labels),) + pc.C.shape[1:])
+    target = np.zeros((len(basis.labels), 3))
+    C[lit], target[lit] = pc.C, pc.target
+    return PathColours(C, target, np.asarray(basis.weights, dtype=np.float64), pc.J)
+
+
+def lit_basis(spectrum, basis, lo: float, hi: float):
+    """The functions of the hat basis on which ``spectrum`` has luminance in [lo, hi]: their
+    indices and the basis restricted to them (equal weights). The others' path colours are 0
+    (a line lamp's empty bands). ValueError when none is lit."""
     from dataclasses import replace
 
     from wavelength_pdf.colorimetry import cmfs
 
-    lo, hi = float(table.grid[0]), float(table.grid[-1])
     cwl, cval = cmfs()
     swl = np.asarray(spectrum.wavelengths, dtype=np.float64)
     lam = np.unique(np.concatenate([np.linspace(lo, hi, 4001), swl[(swl > lo) & (swl < hi)]]))
@@ -297,17 +310,23 @@ def basis_path_colours(table, spectrum, basis, points: int = U_POINTS) -> PathCo
     ybar = np.interp(lam, cwl, cval[:, 1], left=0.0, right=0.0)
     phi = np.stack([np.interp(lam, basis.wavelengths, v) for v in np.asarray(basis.values, dtype=np.float64)])
     lit = np.flatnonzero(np.trapezoid(phi * (E * ybar)[None, :], lam, axis=1) > 0)
-    if lit.size == phi.shape[0]:
-        return path_colours(table, spectrum, basis, points)
     if lit.size == 0:
         raise ValueError(f"{spectrum.name}: no luminance in {lo:g}-{hi:g} nm")
     sub = replace(basis, values=np.asarray(basis.values)[lit], labels=tuple(basis.labels[i] for i in lit),
                   weights=np.full(lit.size, 1.0 / lit.size))
-    pc = path_colours(table, spectrum, sub, points)
-    C = np.zeros((phi.shape[0],) + pc.C.shape[1:])
-    target = np.zeros((phi.shape[0], 3))
-    C[lit], target[lit] = pc.C, pc.target
-    return PathColours(C, target, np.asarray(basis.weights, dtype=np.float64), pc.J)
+    return lit, sub
+
+
+def stack_path_colours(pcs: list[PathColours]) -> PathColours:
+    """The path colours of several lamps' bases as one basis (each lamp's functions in turn),
+    for pixels lit by several kinds of light, each along its own paths (t_p the kinds'
+    coefficients side by side): the same u drives every kind's estimate, so their
+    cross-covariances count."""
+    if len(pcs) == 1:
+        return pcs[0]
+    n = sum(p.C.shape[0] for p in pcs)
+    return PathColours(np.concatenate([p.C for p in pcs]), np.concatenate([p.target for p in pcs]),
+                       np.full(n, 1.0 / n), float(np.mean([p.J for p in pcs])))
 
 
 def one_wavelength_covariance(table, spectrum, basis, step: float = 0.05) -> np.ndarray:
@@ -318,35 +337,45 @@ def one_wavelength_covariance(table, spectrum, basis, step: float = 0.05) -> np.
     g_b(λ) = φ_b(λ) E(λ) cmf(λ) / (q(λ) Y_w) and its covariance ∫ q g_b g_c' dλ − c_b c_c'
     (Y_w = ∫ E ȳ: the white surface has Y = 1, as :func:`path_colours`). A trapezoid rule on
     a ``step`` nm grid joined with the lamp's, the table's and the basis' nodes (the lamp's
-    narrow lines are resolved by their own nodes)."""
-    from wavelength_pdf.colorimetry import cmfs
-
+    narrow lines are resolved by their own nodes). ``spectrum`` may be a list of lamps: the covariance of
+    their stacked bases (:func:`stack_path_colours`), one wavelength drawn for all of them."""
+    spectra = list(spectrum) if isinstance(spectrum, (list, tuple)) else [spectrum]
     lo, hi = float(table.grid[0]), float(table.grid[-1])
-    swl = np.asarray(spectrum.wavelengths, dtype=np.float64)
     bwl = np.asarray(basis.wavelengths, dtype=np.float64)
-    lam = np.unique(np.concatenate([np.arange(lo, hi, step), [hi], swl, np.asarray(table.grid, np.float64), bwl]))
+    lam = np.unique(np.concatenate([np.arange(lo, hi, step), [hi], np.asarray(table.grid, np.float64), bwl,
+                                    *(np.asarray(sp.wavelengths, dtype=np.float64) for sp in spectra)]))
     lam = lam[(lam >= lo) & (lam <= hi)]
-    E = np.interp(lam, swl, np.asarray(spectrum.values, dtype=np.float64), left=0.0, right=0.0)
     q = np.mean([np.interp(lam, table.grid, p) for p in np.asarray(table.pdfs, dtype=np.float64)], axis=0)
-    cwl, cval = cmfs()
-    cmf = np.stack([np.interp(lam, cwl, cval[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
-    phi = np.stack([np.interp(lam, bwl, v) for v in np.asarray(basis.values, dtype=np.float64)])
     w = np.zeros_like(lam)  # trapezoid weights
     w[1:] += 0.5 * np.diff(lam)
     w[:-1] += 0.5 * np.diff(lam)
+    G = np.concatenate([_one_wavelength_terms(lam, w, q, sp, basis) for sp in spectra])  # (J*B*3, L)
+    # Second moment ∫ q g g' = Σ w q g g'.
+    second = (G * (w * q)[None, :]) @ G.T
+    mean = (G * (w * q)[None, :]).sum(axis=1)
+    n = G.shape[0] // 3
+    return (second - np.outer(mean, mean)).reshape(n, 3, n, 3)
+
+
+def _one_wavelength_terms(lam: np.ndarray, w: np.ndarray, q: np.ndarray, spectrum, basis) -> np.ndarray:
+    """g_b,i(λ) = φ_b(λ) cmf_i(λ) E(λ) / (q(λ) Y_w) on ``lam`` (B*3, L) for one lamp
+    (:func:`one_wavelength_covariance`; ``w`` the trapezoid weights of ``lam``)."""
+    from wavelength_pdf.colorimetry import cmfs
+
+    lo, hi = float(lam[0]), float(lam[-1])
+    swl = np.asarray(spectrum.wavelengths, dtype=np.float64)
+    E = np.interp(lam, swl, np.asarray(spectrum.values, dtype=np.float64), left=0.0, right=0.0)
+    cwl, cval = cmfs()
+    cmf = np.stack([np.interp(lam, cwl, cval[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
+    phi = np.stack([np.interp(lam, basis.wavelengths, v) for v in np.asarray(basis.values, dtype=np.float64)])
     yw = float(np.sum(w * E * cmf[:, 1]))
     if not yw > 0:
         raise ValueError(f"{spectrum.name}: no luminance in {lo:g}-{hi:g} nm")
     emits = E > 0
     if np.any(emits & ~(q > 0)):
         raise ValueError(f"the table does not cover {spectrum.name}: q = 0 where the lamp emits")
-    f = np.where(emits, E / np.where(q > 0, q, 1.0), 0.0) / yw  # (L,)
-    # g_b,i(λ) = φ_b(λ) cmf_i(λ) E / (q Y_w); second moment ∫ q g g' = Σ w q g g'.
-    G = (phi[:, None, :] * cmf.T[None, :, :] * f[None, None, :]).reshape(-1, lam.size)  # (B*3, L)
-    second = (G * (w * q)[None, :]) @ G.T
-    mean = (G * (w * q)[None, :]).sum(axis=1)
-    B = phi.shape[0]
-    return (second - np.outer(mean, mean)).reshape(B, 3, B, 3)
+    f = np.where(emits, E / np.where(q > 0, q, 1.0), 0.0) / yw
+    return (phi[:, None, :] * cmf.T[None, :, :] * f[None, None, :]).reshape(-1, lam.size)
 
 
 def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "sobol",
@@ -430,9 +459,7 @@ def lab_quadratic(xyz: np.ndarray, cov: np.ndarray, metric: str = "de2000") -> n
     import colour
 
     white = _white_xy()
-    h = 1e-6 * np.maximum(np.abs(xyz).max(axis=1, keepdims=True), 1e-12)
-    jac = np.stack([(colour.XYZ_to_Lab(xyz + h * e, white) - colour.XYZ_to_Lab(xyz - h * e, white)) / (2 * h)
-                    for e in np.eye(3)], axis=-1)  # (P, 3 Lab, 3 XYZ)
+    jac = _lab_jacobians(xyz)
     cov_lab = jac @ cov @ np.swapaxes(jac, 1, 2)
     s, V = np.linalg.eigh(0.5 * (cov_lab + np.swapaxes(cov_lab, 1, 2)))
     s = np.clip(s, 0.0, None)
@@ -448,6 +475,76 @@ def lab_quadratic(xyz: np.ndarray, cov: np.ndarray, metric: str = "de2000") -> n
         q = 0.5 * sum(delta_e2000(lab_c + sgn * eps * v, lab_c) ** 2 for sgn in (1.0, -1.0)) / eps ** 2
         total += s[:, i] * q
     return total
+
+
+def _lab_jacobians(xyz: np.ndarray) -> np.ndarray:
+    """d Lab / d XYZ (P, 3 Lab, 3 XYZ) at each colour by central differences."""
+    import colour
+
+    white = _white_xy()
+    h = 1e-6 * np.maximum(np.abs(xyz).max(axis=1, keepdims=True), 1e-12)
+    return np.stack([(colour.XYZ_to_Lab(xyz + h * e, white) - colour.XYZ_to_Lab(xyz - h * e, white)) / (2 * h)
+                     for e in np.eye(3)], axis=-1)
+
+
+def xyz_metrics(xyz: np.ndarray) -> np.ndarray:
+    """CIEDE2000's local quadratic form in XYZ at each colour (P, 3, 3): A = Jl' G Jl, so that
+    E[CIEDE2000(xyz + e, xyz)^2] ~ tr(A Cov(e)) for a small error e. G is taken in Lab from the
+    even part of the squared difference along the axes and their sums (polarisation), with
+    :func:`lab_quadratic`'s step; it is that function's form as a matrix, for objectives that
+    are linear in a covariance (:func:`pixel_weights`)."""
+    import colour
+
+    xyz = np.atleast_2d(np.asarray(xyz, dtype=np.float64))
+    lab_c = np.asarray(colour.XYZ_to_Lab(xyz, _white_xy()))
+    eps = 1e-4
+    eye = np.eye(3)
+
+    def even(v):  # the quadratic form's value along the Lab direction v, at every colour
+        return 0.5 * sum(delta_e2000(lab_c + sgn * eps * v, lab_c) ** 2 for sgn in (1.0, -1.0)) / eps ** 2
+
+    axis = [even(e) for e in eye]
+    G = np.empty((xyz.shape[0], 3, 3))
+    for i in range(3):
+        G[:, i, i] = axis[i]
+        for j in range(i + 1, 3):
+            G[:, i, j] = G[:, j, i] = 0.5 * (even(eye[i] + eye[j]) - axis[i] - axis[j])
+    jac = _lab_jacobians(xyz)
+    return np.swapaxes(jac, 1, 2) @ G @ jac
+
+
+def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.ndarray | None = None,
+                  terminated: np.ndarray | None = None) -> np.ndarray:
+    """The weights (3, B*3, B*3) with which :func:`pixel_de2`'s mean over the pixels is linear in
+    the basis' covariances (design §4.6, ``pixels``): W_s, W_i, W_1 with
+
+        mean_p de2_p = tr(W_s M_s) + tr(W_i M_i) + tr(W_1 O),
+
+    M_s the stratified and M_i the independent covariance of a pixel's mean of ``spp`` samples
+    (:func:`basis_covariance`), O one path's covariance when it keeps one wavelength
+    (:func:`one_wavelength_covariance`), each flattened colour-major (b, channel). Each pixel
+    contributes t_p t_p' ⊗ A_p (A_p, :func:`xyz_metrics` at its colour t_p · target) times
+    (1 − s)², (1 − s)² r and s² (1 + r) / N, r its incoherence capped at N and s its
+    dispersed share, as in :func:`pixel_de2`. The metric at each pixel's colour depends on
+    the lamp and the scene, not on the table, so an optimizer can minimise the image's
+    predicted error through three fixed matrices, whatever the number of pixels."""
+    t = np.atleast_2d(np.asarray(t, dtype=np.float64))
+    target = np.asarray(target, dtype=np.float64)
+    P, B = t.shape
+    if target.shape != (B, 3):
+        raise ValueError(f"target must be ({B}, 3), the basis' colours, not {target.shape}")
+    if P == 0:
+        raise ValueError("no pixels to weight")
+    r = np.zeros(P) if incoherence is None else np.minimum(np.asarray(incoherence, dtype=np.float64), spp)
+    s = np.zeros(P) if terminated is None else np.asarray(terminated, dtype=np.float64)
+    if r.shape != (P,) or s.shape != (P,) or not (np.all(np.isfinite(r)) and np.all(r >= 0)
+                                                  and np.all((s >= 0) & (s <= 1))):
+        raise ValueError(f"incoherence and terminated must be {P} finite values (>= 0, and in [0, 1])")
+    A = xyz_metrics(t @ target)
+    out = []
+    for w in ((1 - s) ** 2, (1 - s) ** 2 * r, s ** 2 * (1 + r) / spp):
+        out.append(np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True).reshape(B * 3, B * 3))
+    return np.stack(out)
 
 
 def j_squared(pc: PathColours, spp: int, pixel_sampler: str = "sobol") -> float:

@@ -96,6 +96,9 @@ class Problem:
     reflectance_set: str = ""
     objective: str = "J"
     spp: int = 1
+    #: The ``pixels`` objective's weights (3, K*3, K*3) over the surface colours (a hat basis
+    #: of a scene's pixel spectra): :func:`wavelength_pdf.predict.pixel_weights`.
+    pixels: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def batched(self) -> bool:
@@ -329,11 +332,19 @@ def simplify(problem: Problem, rel_tol: float) -> Problem:
         simpler = _from_nodes(problem.name, problem.source, problem.grid, x[keep], Y[keep, 0], Y[keep, 1:4],
                               refl=Y[keep, 4:].T, weights=problem.weights,
                               reflectance_set=problem.reflectance_set)
-    return with_objective(simpler, problem.objective, problem.spp)
+    return with_objective(simpler, problem.objective, problem.spp, problem.pixels)
+
+
+def white_of(problem: Problem) -> Problem:
+    """The same lamp on the same grid and nodes without surface colours (§4.1's white
+    surface), for J."""
+    n = problem.n_nodes
+    return _from_nodes(problem.name, problem.source, problem.grid, problem.nodes[:n], problem.spec[:n],
+                       problem.cmf[:n])
 
 
 #: The objectives a problem can stand for (design §4.6).
-OBJECTIVES = ("J", "stratified")
+OBJECTIVES = ("J", "stratified", "pixels")
 #: The pixel's sample count ``stratified`` models unless told (the benchmark's middle spp).
 DEFAULT_OBJECTIVE_SPP = 64
 #: Most strata ``stratified`` models (each adds a breakpoint to every evaluation).
@@ -387,20 +398,35 @@ def objective_label(objective: str, spp: int) -> str:
     return objective if objective == "J" else f"{objective}, spp {spp}"
 
 
-def with_objective(problem: Problem, objective: str = "J", spp: int = DEFAULT_OBJECTIVE_SPP) -> Problem:
+def with_objective(problem: Problem, objective: str = "J", spp: int = DEFAULT_OBJECTIVE_SPP,
+                   pixels: np.ndarray | None = None) -> Problem:
     """The same problem standing for ``objective`` (design §4.6).
 
     ``"J"``: §4.1, the problem as built. ``"stratified"``: the linearised root-mean-square
     CIEDE2000 of a pixel that averages ``spp`` samples of C(u), one u in each of ``spp``
     equal strata, times sqrt(spp) (one path's units, like J). Its arrays gain the strata's
     edges (breakpoints of the u-quadrature) and CIEDE2000's quadratic form in XYZ at each
-    target colour; ``spp=1`` is a pixel of independent samples at any spp.
+    target colour; ``spp=1`` is a pixel of independent samples at any spp. ``"pixels"``: the
+    predicted mean over a scene's pixels of the same at ``spp``, the surface colours being a
+    hat basis of the pixels' spectra and ``pixels`` (or the problem's own) the weights of
+    :func:`wavelength_pdf.predict.pixel_weights`, made for that spp.
     """
     check_objective(objective, spp)
-    arrays = {k: v for k, v in problem.arrays.items() if k not in ("strata", "strata_metric")}
+    drop = ("strata", "strata_metric", "pixel_ws", "pixel_wi", "pixel_w1")
+    arrays = {k: v for k, v in problem.arrays.items() if k not in drop}
     if objective == "J":
         return replace(problem, arrays=arrays, objective="J", spp=1)
     spp = int(spp)
+    if objective == "pixels":
+        pixels = problem.pixels if pixels is None else np.asarray(pixels, dtype=np.float64)
+        k = problem.refl.shape[0] if problem.batched else 0
+        if pixels is None or not problem.batched or pixels.shape != (3, 3 * k, 3 * k):
+            raise ValueError("the pixels objective needs a hat basis as surface colours and its weights "
+                             f"(3, {3 * k}, {3 * k}) (wavelength_pdf.predict.pixel_weights)")
+        extra = {"strata": np.arange(1, spp, dtype=np.float64) / spp, "pixel_ws": pixels[0],
+                 "pixel_wi": pixels[1], "pixel_w1": pixels[2]}
+        arrays.update(jax.device_put(extra))
+        return replace(problem, arrays=arrays, objective=objective, spp=spp, pixels=pixels)
     c = np.atleast_2d(problem.c)
     lab = np.atleast_2d(problem.lab_c)
     metric = np.stack([_xyz_metric(ck, lk) for ck, lk in zip(c, lab)])

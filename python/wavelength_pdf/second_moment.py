@@ -85,16 +85,46 @@ def _diag_one(arr: dict, msum_nodes: Array) -> Array:
     wavelength space (u = F_j(lambda)), where on every node interval f^2 is a quartic and
     M is linear, so it has no quadrature error however small M gets.
     """
+    A, B, Cq = _interval_coefficients(arr, arr["spec"])
+    d = jnp.stack([A * A, 2 * A * B, B * B + 2 * A * Cq, 2 * B * Cq, Cq * Cq], axis=-1)  # (n, 3, 5)
+    return _over_mixture(arr, d, msum_nodes)
+
+
+def weighted_second_moment(arr: dict, msum_nodes: Array, W: Array) -> Array:
+    """Integral of f' W f / M over the grid range, exactly, for the surface colours' f (the
+    vector of every colour's three channels, colour-major: K * 3) and a symmetric weight W
+    (K * 3, K * 3): the same-wavelength part of a weighted second moment across colours and
+    channels, which the ``pixels`` objective's dispersive paths need (design §4.6). On every
+    node interval f' W f is a quartic, as f^2 is in ``_diag_one``."""
+    K = arr["spec"].shape[0]
+    A, B, Cq = (x.reshape(x.shape[0], K * 3) for x in
+                (jnp.moveaxis(y, 0, 1) for y in jax.vmap(lambda s: _interval_coefficients(arr, s))(arr["spec"])))
+
+    def form(x, y):
+        return jnp.einsum("na,ab,nb->n", x, W, y)
+
+    d = jnp.stack([form(A, A), 2 * form(A, B), form(B, B) + 2 * form(A, Cq), 2 * form(B, Cq), form(Cq, Cq)],
+                  axis=-1)  # (n, 5)
+    return _over_mixture(arr, d[:, None, :], msum_nodes)[0]
+
+
+def _interval_coefficients(arr: dict, spec: Array) -> tuple[Array, Array, Array]:
+    """f = spec * cmf on every node interval as A + B t + C t^2 (t from the interval's start),
+    each (n, 3)."""
+    x = arr["nodes"]
+    h = x[1:] - x[:-1]
+    s0, s1 = spec[:-1], (spec[1:] - spec[:-1]) / h
+    k0 = arr["cmf"][:-1]
+    k1 = (arr["cmf"][1:] - arr["cmf"][:-1]) / h[:, None]
+    return s0[:, None] * k0, s0[:, None] * k1 + s1[:, None] * k0, s1[:, None] * k1
+
+
+def _over_mixture(arr: dict, d: Array, msum_nodes: Array) -> Array:
+    """Sum over the node intervals of the integral of the quartics d (n, c, 5: coefficients
+    of t^0 .. t^4 on each interval) over the mixture M, linear on each interval: (c,)."""
     grid = arr["grid"]
     x = arr["nodes"]
     h = x[1:] - x[:-1]
-    s0, s1 = arr["spec"][:-1], (arr["spec"][1:] - arr["spec"][:-1]) / h
-    k0 = arr["cmf"][:-1]
-    k1 = (arr["cmf"][1:] - arr["cmf"][:-1]) / h[:, None]
-    A = s0[:, None] * k0
-    B = s0[:, None] * k1 + s1[:, None] * k0
-    Cq = s1[:, None] * k1
-    d = jnp.stack([A * A, 2 * A * B, B * B + 2 * A * Cq, 2 * B * Cq, Cq * Cq], axis=-1)  # (n, 3, 5)
     m = jnp.interp(x, grid, msum_nodes, left=0.0, right=0.0)
     m0, m1 = m[:-1], m[1:]
     # Orient every interval so that M is smallest at t = 0: t -> h - t flips the quartic.

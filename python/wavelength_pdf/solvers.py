@@ -324,7 +324,10 @@ class _Context:
         # exact one (``health_init``).
         self.J_init, self.var_ref = self._reference(self.fine, P_init)
         self._var_refs: dict[int, jax.Array] = {1: self.var_ref}
-        self.mu = float(penalty_weight * max(self.J_init, 1e-3))
+        # The ``pixels`` objective is itself a variance over every pixel's colour, and its
+        # health rule is the white surface's (``health.health``): a penalty per basis colour
+        # and channel (some nearly black) would hold it to what the image does not show.
+        self.mu = 0.0 if problem.objective == "pixels" else float(penalty_weight * max(self.J_init, 1e-3))
         self.progress = progress
         # A count of its own: a repair run (``_best_accepted``) extends it.
         self.max_evals = budget.max_evaluations

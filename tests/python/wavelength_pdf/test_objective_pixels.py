@@ -1,0 +1,124 @@
+"""The ``pixels`` objective (design §4.6): the image's predicted error as an optimizer objective.
+
+- its value is the tabulated pixel prediction (``choose.wavelength_error``: the mean over the
+  pixels of ``predict.pixel_de2``, with incoherence and dispersion) computed by the objective's
+  own quadrature, for an emission table and an optimized one;
+- its gradient agrees with finite differences;
+- ``xyz_metrics`` is ``lab_quadratic``'s measure as a matrix;
+- ``optimize_for_pixels`` never returns a table predicted worse than the one it started from,
+  and the result's figures are that prediction;
+- the objective refuses a problem without its weights.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wavelength_pdf import objective, predict as P, stratified
+from wavelength_pdf.evaluation import transfer
+from wavelength_pdf.evaluation.choose import wavelength_error
+from wavelength_pdf.optimize import optimize_for_pixels
+from wavelength_pdf.precision import float64
+from wavelength_pdf.problem import make_problem, with_objective
+from wavelength_pdf.spectra import load_spectrum
+
+LO, HI = 380.0, 780.0
+CENTRES = np.arange(400.0, 780.0, 40.0)  # 10 hats: a coarse film, cheap to compile
+
+
+@pytest.fixture(scope="module")
+def fl2():
+    return load_spectrum("cie:FL2", LO, HI)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    """A made-up image: 40 pixels of smooth coloured transfers, some incoherent, a few dispersed."""
+    rng = np.random.default_rng(3)
+    x = (CENTRES - 580.0) / 200.0
+    t = np.stack([0.2 + 0.7 * np.abs(np.sin(a + b * x)) for a, b in rng.uniform(0, 3, size=(40, 2))])
+    t *= rng.uniform(0.3, 1.5, size=(40, 1))
+    r = np.where(rng.uniform(size=40) < 0.5, rng.uniform(0, 200, size=40), 0.0)
+    s = np.where(rng.uniform(size=40) < 0.2, rng.uniform(0, 1, size=40), 0.0)
+    return transfer.Transfer(CENTRES, t, np.ones((5, 8), dtype=bool), 1.0, r, s)
+
+
+@float64
+def _pixels_value(table, spectrum, tr, spp):
+    """The objective's V = value^2 / N for ``table``."""
+    grid = np.asarray(table.grid, dtype=np.float64)
+    lit, basis = P.lit_basis(spectrum, P.hat_basis(tr.centres, grid[0], grid[-1]), grid[0], grid[-1])
+    problem = make_problem(spectrum, grid, basis)
+    W = P.pixel_weights(problem.c, tr.t[:, lit], spp, tr.incoherence, tr.terminated)
+    problem = with_objective(problem, "pixels", spp, W)
+    return problem, objective.J(problem, table.pdfs) ** 2 / spp
+
+
+@pytest.mark.parametrize("spp", [16, 64])
+def test_value_is_the_tabulated_pixel_prediction(fl2, scene, spp):
+    basis = P.hat_basis(CENTRES, LO, HI)
+    for table in (stratified.stratified_table(fl2, "spd", LO, HI), stratified.stratified_table(fl2, "xyz", LO, HI)):
+        want = wavelength_error(table, fl2, basis, scene, spp)
+        _, got = _pixels_value(table, fl2, scene, spp)
+        # Quadrature against a 2^15-point tabulation of C(u), and CIEDE2000's form as a matrix
+        # against its value along the covariance's axes: both agree far below any ranking's needs.
+        assert got == pytest.approx(want, rel=2e-3)
+
+
+def test_dispersion_and_incoherence_count(fl2, scene):
+    """Without the incoherent and dispersed pixels' terms the value is smaller: each term is a
+    variance the objective adds, not a constant."""
+    table = stratified.stratified_table(fl2, "spd", LO, HI)
+    quiet = transfer.Transfer(CENTRES, scene.t, scene.mask, 1.0, np.zeros(40), np.zeros(40))
+    assert _pixels_value(table, fl2, quiet, 64)[1] < _pixels_value(table, fl2, scene, 64)[1]
+
+
+@float64
+def test_gradient_agrees_with_finite_differences(fl2, scene):
+    table = stratified.stratified_table(fl2, "xyz", LO, HI)
+    problem, _ = _pixels_value(table, fl2, scene, 64)
+    vg = objective.value_and_grad(problem)
+    Pm = np.asarray(table.pdfs, dtype=np.float64)
+    val, grad = vg(Pm)
+    grad = np.asarray(grad)
+    rng = np.random.default_rng(0)
+    # Nodes inside each density's band (the stratified densities are zero outside theirs).
+    inside = [(k, i) for k in range(4) for i in np.flatnonzero(Pm[k] > 0.1 * Pm[k].max())]
+    for k, i in (inside[j] for j in rng.choice(len(inside), 6, replace=False)):
+        h = 1e-6 * Pm[k, i]
+        up, down = Pm.copy(), Pm.copy()
+        up[k, i] += h
+        down[k, i] -= h
+        fd = (float(vg(up)[0]) - float(vg(down)[0])) / (2 * h)
+        assert grad[k, i] == pytest.approx(fd, rel=1e-4, abs=1e-6 * abs(float(val)) / Pm[k, i])
+
+
+def test_xyz_metric_is_lab_quadratic_as_a_matrix():
+    rng = np.random.default_rng(1)
+    xyz = rng.uniform(0.05, 1.0, size=(6, 3))
+    L = rng.normal(size=(6, 3, 3)) * 1e-3
+    cov = L @ np.swapaxes(L, 1, 2)
+    A = P.xyz_metrics(xyz)
+    np.testing.assert_allclose(np.einsum("pij,pij->p", A, cov), P.lab_quadratic(xyz, cov), rtol=1e-3)
+    np.testing.assert_allclose(A, np.swapaxes(A, 1, 2))
+
+
+def test_polish_is_never_worse_than_its_start(fl2, scene):
+    start = stratified.stratified_table(fl2, "spd", LO, HI)
+    basis = P.hat_basis(CENTRES, LO, HI)
+    before = wavelength_error(start, fl2, basis, scene, 64)
+    result = optimize_for_pixels(fl2, start, scene.t, CENTRES, 64, incoherence=scene.incoherence,
+                                 terminated=scene.terminated, max_evaluations=30)
+    assert result.accepted, result.reason
+    after = wavelength_error(result.table, fl2, basis, scene, 64)
+    assert after <= before * (1 + 1e-3)
+    assert result.J ** 2 / 64 == pytest.approx(after, rel=2e-3)
+    assert result.objective == "pixels, spp 64"
+
+
+def test_pixels_objective_needs_its_weights(fl2):
+    problem = make_problem(fl2, np.linspace(LO, HI, 81), P.hat_basis(CENTRES, LO, HI))
+    with pytest.raises(ValueError, match="pixel_weights"):
+        with_objective(problem, "pixels", 64)
+    with pytest.raises(ValueError, match="pixel_weights"):
+        with_objective(make_problem(fl2, np.linspace(LO, HI, 81)), "pixels", 64, np.zeros((3, 3, 3)))
