@@ -127,7 +127,8 @@ def add_parser(sub) -> None:
              "predicted image error over the pixels it lights",
         description="Wavelength guiding (pbrt --wavelength-guiding) gives each tile the table of its light "
                     "mixture. This predicts, for each mixture, the image error over the pixels it lights "
-                    "(design §6.8, the scene relit by the mixture) of its emission table and of each folder's "
+                    "(design §6.8: a copy of the scene per kind of light gives each pixel's light along "
+                    "that kind's own paths) of its emission table and of each folder's "
                     "optimized table, as the renderer samples them (defensive share included), and writes "
                     "the winners to OUT for pbrt --wavelength-guiding-tables OUT (mixtures whose emission "
                     "table wins have no file there) with OUT/choice.csv. SPECTRA is the folder pbrt "

@@ -61,15 +61,23 @@ def check_spp(spp: int, pixel_sampler: str) -> None:
 
 
 def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pixel_sampler: str = "sobol",
-                     pixels: np.ndarray | slice = slice(None)) -> float:
+                     pixels: np.ndarray | slice = slice(None), kinds: np.ndarray | None = None) -> float:
     """The mean over ``tr``'s lit pixels (or those ``pixels`` selects) of each pixel's predicted
     squared CIEDE2000 of its wavelength sampling with ``table`` under ``spectrum``
-    (:func:`wavelength_pdf.predict.pixel_de2`, with its incoherence and dispersion)."""
+    (:func:`wavelength_pdf.predict.pixel_de2`, with its incoherence and dispersion).
+
+    ``spectrum`` may be a list of J kinds of light with ``kinds`` (J, P, B) their transfers
+    (:func:`.transfer.kind_transfers`): each pixel is then lit by every kind along that kind's
+    own paths, sum_j E_j t_pj."""
     from wavelength_pdf import predict as P
 
-    pc = P.basis_path_colours(table, spectrum, basis)
-    one = P.one_wavelength_covariance(table, spectrum, basis)
-    return float(np.mean(P.pixel_de2(pc, tr.t[pixels], spp, pixel_sampler, incoherence=tr.incoherence[pixels],
+    spectra = list(spectrum) if isinstance(spectrum, (list, tuple)) else [spectrum]
+    if kinds is None and len(spectra) > 1:
+        raise ValueError("several kinds of light need their transfers (kinds)")
+    t = tr.t if kinds is None else np.concatenate(list(np.asarray(kinds)), axis=1)
+    pc = P.stack_path_colours([P.basis_path_colours(table, sp, basis) for sp in spectra])
+    one = P.one_wavelength_covariance(table, spectra, basis)
+    return float(np.mean(P.pixel_de2(pc, t[pixels], spp, pixel_sampler, incoherence=tr.incoherence[pixels],
                                      terminated=tr.terminated[pixels], one_wavelength=one)))
 
 

@@ -12,10 +12,14 @@ is applied per guiding table:
 - the tile map (``tiles.txt``) and the mixtures (``mixture-HASH.spd``, ``clusters.txt``) come
   from ``pbrt --wavelength-guiding-spectra DIR`` at the render's settings (design §5.2);
 - the scene's transfer (:mod:`.transfer`: every emitter flat, a spectral film) gives each
-  pixel's spectral transfer t_p; a pixel of table k is modelled as lit by that table's mixture
-  m_k (its spectrum m_k(λ) t_p(λ) in the basis). This is exact when every kind of light reaches
-  the pixel by the same paths in the table's proportions, which the clustering makes roughly
-  so; it is an approximation, not the scene's own light;
+  pixel's incoherence and dispersed share, and one copy per kind of light (``kinds.txt``: the
+  kinds' spectra E_j and their emitters; the other kinds' emitters dark) gives each pixel's
+  transfer t_pj along that kind's own paths, so that the pixel's spectrum is
+  sum_j E_j(λ) t_pj(λ) (:func:`.transfer.kind_transfers`). Without ``kinds.txt`` (a folder of
+  an older renderer) a pixel of table k is modelled as lit by that table's mixture m_k along
+  the whole transfer's paths, m_k(λ) t_p(λ): exact only when every kind reaches the pixel by
+  the same paths, and in the benchmark's window room, where daylight and the tube light a
+  pixel along different paths, it chose the wrong table on half of them (docs/guiding.md);
 - each candidate is predicted as the renderer samples it: ``emission`` is the table that run
   wrote (``table-K.txt``: design §1.7's stratified table of the mixture with the defensive
   share), each folder's ``mixture-HASH.csv`` is mixed with the defensive spectrum
@@ -49,6 +53,9 @@ from wavelength_pdf.evaluation import transfer
 
 EMISSION = "emission"
 CHOICE = "choice.csv"
+#: The renderer's wavelength range (its Lambda_min, Lambda_max), where it cuts the defensive
+#: spectrum into bands.
+RENDER_RANGE = (360.0, 830.0)
 
 
 @dataclass(frozen=True)
@@ -121,13 +128,17 @@ def read_defensive(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
 
 def with_defensive(table, lam: np.ndarray, phi: np.ndarray, S: float):
     """``table`` as the renderer samples an optimized guiding table (design §1.8): each density
-    (1 − S) p_k + S Φ̂ on the union of the two grids (each linear between its nodes, 0 outside)."""
+    (1 − S) p_k + S b_k, b_k the k-th of four equal-mass bands of the defensive spectrum Φ̂
+    (§1.7's stratified table of Φ̂ on the renderer's 360-830 nm), on the union of the grids."""
+    from wavelength_pdf.spectra import Spectrum
+    from wavelength_pdf.stratified import stratified_table
     from wavelength_pdf.table import Table, normalize
 
-    grid = np.union1d(np.asarray(table.grid, dtype=np.float64), lam)
-    d = np.interp(grid, lam, phi, left=0.0, right=0.0)
-    pdfs = np.stack([(1 - S) * np.interp(grid, table.grid, p, left=0.0, right=0.0) + S * d
-                     for p in np.asarray(table.pdfs, dtype=np.float64)])
+    bands = stratified_table(Spectrum("defensive", "the scene's emission", lam, phi), "spd", *RENDER_RANGE)
+    grid = np.union1d(np.asarray(table.grid, dtype=np.float64), bands.grid)
+    pdfs = np.stack([(1 - S) * np.interp(grid, table.grid, p, left=0.0, right=0.0)
+                     + S * np.interp(grid, bands.grid, b, left=0.0, right=0.0)
+                     for p, b in zip(np.asarray(table.pdfs, dtype=np.float64), np.asarray(bands.pdfs))])
     return Table(grid, normalize(grid, pdfs), list(table.comments))
 
 
@@ -146,6 +157,50 @@ def read_clusters(path: str | Path) -> dict[int, str]:
         return {int(r["table"]): r["mixture"] for r in rows}
     except (KeyError, TypeError, ValueError):
         raise ValueError(f"{path}: not a guiding cluster list (columns table, tiles, mixture, shares)") from None
+
+
+def read_kinds(path: str | Path) -> tuple[list, list[set[tuple[str, int]]]]:
+    """``kinds.txt`` (design §5.2): each kind of light's spectrum and its emitters, as
+    (file name, line) pairs that :func:`.transfer.kind_transfers` leaves lit. ValueError naming
+    the file and line when it is not one."""
+    from wavelength_pdf.spectra import check_support, make_spectrum
+
+    path = Path(path)
+    lines = path.read_text().splitlines()
+    spectra: list[list[tuple[float, float]]] = []
+    lights: list[set[tuple[str, int]]] = []
+    table = False
+    for n, line in enumerate(lines, start=1):
+        text = line.strip()
+        try:
+            if text.startswith("# kind "):
+                if int(text.split()[2]) != len(spectra):
+                    raise ValueError("kinds out of order")
+                spectra.append([])
+                lights.append(set())
+            elif not text or text.startswith("#"):
+                continue
+            elif text == "kind,light":
+                table = True
+            elif table:
+                kind, label = text.split(",", 1)
+                file, line_no, _col = label.rsplit(":", 2)
+                lights[int(kind)].add((Path(file).name, int(line_no)))
+            else:
+                lam, value = (float(v) for v in text.split())
+                spectra[-1].append((lam, value))
+        except (ValueError, IndexError):
+            raise ValueError(f"{path}:{n}: not a line of a guiding kinds file: {line[:60]!r}") from None
+    if not spectra or not table or any(not s for s in spectra) or any(not l for l in lights):
+        raise ValueError(f"{path}: not a guiding kinds file (each kind's '# kind K' spectrum, then "
+                         "'kind,light' rows naming every kind's lights)")
+    out = []
+    for k, pairs in enumerate(spectra):
+        lam, val = np.asarray(pairs).T
+        sp = make_spectrum(f"kind-{k}", f"{path} kind {k}", lam, val, where=str(path))
+        check_support(sp, transfer.LO, transfer.HI, where=f"{path}: kind {k}")
+        out.append(sp)
+    return out, lights
 
 
 @dataclass(frozen=True)
@@ -215,9 +270,17 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         raise ValueError(f"none of the folders {', '.join(map(str, candidates.values()))} holds a table of "
                          f"these mixtures ({', '.join(sorted(mixtures.values()))})")
 
+    kind_spectra, kind_lights = read_kinds(spectra / "kinds.txt") if (spectra / "kinds.txt").is_file() else ([], [])
+
     say(f"choose-guiding: the scene's transfer ({transfer_spp} spp) and incoherence at {resolution:g} of its "
         f"size, in {workdir}")
     tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp)
+    kinds = None
+    if len(kind_spectra) > 1:
+        say(f"choose-guiding: each of the {len(kind_spectra)} kinds of light's transfer ({transfer_spp} spp)")
+        kinds = transfer.kind_transfers(scene, workdir, kind_lights, tr, resolution, pbrt, transfer_spp)
+    elif not kind_spectra:
+        say("choose-guiding: no kinds.txt (an older renderer's folder): each pixel lit by its table's mixture")
     of_pixel = tiles.table_of(tr.mask.shape)[tr.mask]
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     choices = []
@@ -227,7 +290,10 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         predicted = {}
         for name, table in tables[k].items():
             say(f"choose-guiding: table {k} ({mix}), predicting {name}")
-            predicted[name] = wavelength_error(table, lamps[k], basis, tr, spp, pixel_sampler, sel)
+            if kinds is None:
+                predicted[name] = wavelength_error(table, lamps[k], basis, tr, spp, pixel_sampler, sel)
+            else:
+                predicted[name] = wavelength_error(table, kind_spectra, basis, tr, spp, pixel_sampler, sel, kinds)
         best = min((n for n in predicted if n != EMISSION), key=predicted.get, default=EMISSION)
         chosen = best if predicted[best] < (1 - margin) * predicted[EMISSION] else EMISSION
         choices.append(MixtureChoice(k, mix, int(pixels.sum()), predicted, chosen))

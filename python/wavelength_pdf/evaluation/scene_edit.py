@@ -13,6 +13,7 @@ spans of the tokens that change are replaced, so everything else stays byte for 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Collection
 
 import numpy as np
 
@@ -72,7 +73,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
                lo: float = 380.0, hi: float = 780.0,
                resolution: tuple[int, int] | float | None = None,
                maxdepth: int | None = None, pixel_sampler: str | None = None,
-               cut_emitters: bool = False) -> Path:
+               cut_emitters: bool = False, dark: Collection[tuple[str, int]] = ()) -> Path:
     """Write a copy of ``scene`` at ``out`` lit by ``spectrum`` (None: keep the emitters).
 
     ``resolution`` is the film's new (width, height), or a factor applied to the scene's own
@@ -83,7 +84,9 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
     None keeps it. ``cut_emitters`` (with ``spectrum`` None) cuts every emitter's inline
     spectrum to [lo, hi] as :func:`inline_spectrum` does, so that every sampler of the
     comparison integrates the same light; an emitter given otherwise (rgb, blackbody, a file)
-    is an error then.
+    is an error then. ``dark`` names emitter statements by (file name, line) whose "scale"
+    becomes 0 (added when they give none): a copy lit by some of the scene's lights only, with
+    every light's geometry in place.
 
     Included files are inlined into the copy's folder as edited copies of their own, so that
     emitters and file names inside them are handled the same way.
@@ -96,7 +99,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
     scene, out = Path(scene).resolve(), Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     body = _edit_file(scene, spectrum, out.parent, lo, hi, resolution, maxdepth, depth=0,
-                      pixel_sampler=pixel_sampler, cut=cut_emitters)
+                      pixel_sampler=pixel_sampler, cut=cut_emitters, dark=set(dark))
     tmp = out.with_suffix(out.suffix + ".tmp")
     tmp.write_text(body)
     tmp.replace(out)
@@ -105,7 +108,7 @@ def edit_scene(scene: str | Path, spectrum: Spectrum | None, out: str | Path, *,
 
 def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, hi: float,
                resolution: tuple[int, int] | float | None, maxdepth: int | None, depth: int,
-               pixel_sampler: str | None = None, cut: bool = False) -> str:
+               pixel_sampler: str | None = None, cut: bool = False, dark: set = frozenset()) -> str:
     if depth > 32:
         raise SpectrumError(f"{path}: Include nesting deeper than 32 (a cycle?)")
     try:
@@ -132,7 +135,7 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
             child = (here / arg.text).resolve()
             name = f"include-{depth + 1}-{abs(hash(str(child))) % 10**8}.pbrt"
             (outdir / name).write_text(_edit_file(child, spectrum, outdir, lo, hi, resolution, maxdepth,
-                                                  depth + 1, pixel_sampler, cut))
+                                                  depth + 1, pixel_sampler, cut, dark))
             edits.append((arg.start, arg.end, f'"{outdir / name}"'))
             continue
         if d not in _WITH_PARAMS:
@@ -183,6 +186,13 @@ def _edit_file(path: Path, spectrum: Spectrum | None, outdir: Path, lo: float, h
             new = f'Sampler "{pixel_sampler}"' + (f' "integer pixelsamples" [ {count} ]' if count else "")
             edits.append((st.directive.start, end, new))
             continue
+        if d in ("LightSource", "AreaLightSource") and (path.name, st.directive.line) in dark:
+            scale = next((p for p in st.params if p.name == "scale" and p.values), None)
+            if scale is not None:
+                edits.append((*_span(scale.values), "0"))
+            else:
+                anchor = st.args[0].end if st.args else st.directive.end
+                edits.append((anchor, anchor, ' "float scale" [ 0 ]'))
         if emitting and not replaced:
             # No L/I given (the colour space's illuminant): add the spectrum after the type.
             anchor = st.args[0].end if st.args else st.directive.end

@@ -25,6 +25,7 @@ from __future__ import annotations
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Collection, Sequence
 
 import numpy as np
 
@@ -115,17 +116,18 @@ def one_kind(source: str | Path):
 
 
 def copy_scene(source: str | Path, folder: str | Path, resolution: tuple[int, int] | float | None = None,
-               buckets: int = BUCKETS) -> Path:
+               buckets: int = BUCKETS, dark: Collection[tuple[str, int]] = ()) -> Path:
     """``folder/scene.pbrt``: a copy of ``source`` whose every emitter has a flat spectrum over
     [LO, HI] and whose film is a spectral film of ``buckets``, at ``resolution`` (design §6.1's
     scene copy). Its transfer holds for the scene relit by any one lamp (as the benchmark's
     jobs are); for the scene's own lamps, only when they are of one kind
-    (:func:`one_kind`)."""
+    (:func:`one_kind`). ``dark``: emitters (file name, line) left dark in the copy
+    (:func:`kind_transfers`)."""
     from wavelength_pdf.evaluation.scene_edit import DEFAULT_FILM, edit_scene
 
     source, folder = Path(source), Path(folder)
     draft = edit_scene(source, FLAT, folder / "draft.pbrt", lo=LO, hi=HI, resolution=resolution,
-                       pixel_sampler="sobol")
+                       pixel_sampler="sobol", dark=dark)
     size = resolution if isinstance(resolution, tuple) else \
         tuple(max(1, round(v * (resolution or 1.0))) for v in DEFAULT_FILM)
     try:
@@ -201,3 +203,25 @@ def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] 
     pair = tuple(render(scene_file, pbrt, INCOHERENCE_SPP, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
                         name=f"incoherence-seed{seed}.exr") for seed in (1, 2))
     return load(render(scene_file, pbrt, spp, nthreads), pair)
+
+
+def kind_transfers(source: str | Path, folder: str | Path, lights: Sequence[Collection[tuple[str, int]]],
+                   whole: Transfer, resolution: tuple[int, int] | float | None = None,
+                   pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None) -> np.ndarray:
+    """Each kind of light's share of every pixel's transfer, for a scene lit by several kinds
+    (design §6.8): ``lights[j]`` names kind j's emitters (file name, line); the copy of kind j
+    has every other emitter dark. Returns (J, P, B): kind j's transfer of ``whole``'s lit
+    pixels, in ``whole``'s units (the same film, so its scale), so that the kinds sum to
+    ``whole.t`` up to the renders' noise. A pixel lit by kind j alone is E_j(λ) t_j(λ); lit by
+    several, sum_j E_j(λ) t_j(λ), each kind along its own paths."""
+    from wavelength_pdf.exr import read_spectral
+
+    names = {n for kind in lights for n in kind}
+    out = []
+    for j in range(len(lights)):
+        scene_file = copy_scene(source, Path(folder) / f"kind-{j}", resolution, dark=names - set(lights[j]))
+        centres, buckets = read_spectral(render(scene_file, pbrt, spp, nthreads))
+        if not np.allclose(centres, whole.centres) or buckets.shape[:2] != whole.mask.shape:
+            raise ValueError(f"{scene_file}: its film differs from the whole scene's copy")
+        out.append(np.clip(buckets[whole.mask], 0.0, None) * whole.scale)
+    return np.stack(out)

@@ -26,6 +26,7 @@
 #include <fstream>
 #include <map>
 #include <numeric>
+#include <set>
 #include <sstream>
 
 namespace pbrt {
@@ -41,6 +42,7 @@ LightKinds SceneLightKinds(const Scene &scene) {
     LightKinds kinds;
     kinds.lambdas = total.lambdas;
     kinds.kindOfLight.assign(scene.lights.size(), -1);
+    kinds.lightLabels.resize(scene.lights.size());
     const size_t n = kinds.lambdas.size();
 
     // Lights that share a spectrum object (the triangles of one area light, equal tables)
@@ -50,6 +52,7 @@ LightKinds SceneLightKinds(const Scene &scene) {
     std::vector<double> strongest;            // per kind: the largest light power factor
     for (size_t li = 0; li < scene.lights.size(); ++li) {
         const Light &l = scene.lights[li];
+        kinds.lightLabels[li] = l.Loc().ToString();
         const double k = l.PowerFactor() * double(l.Scale());
         if (!(k > 0)) continue;
         const Spectrum *s = l.EmissionSpectrum().get();
@@ -287,17 +290,29 @@ wavelength_table::Table StratifiedGuidedTable(const LightKinds &kinds, const std
 
 wavelength_table::Table DefensiveGuidedTable(const wavelength_table::Table &t, const LightKinds &kinds,
                                              double S) {
-    const std::vector<double> phi = SceneSpectrum(kinds);
+    // The defensive spectrum cut into four equal-mass bands (design §1.7, the spectrum alone),
+    // density k taking band k: the mixture (the densities' mean) gains S/4 times the bands'
+    // sum 4 phi, S phi, as it would from phi mixed into every density, but each density stays
+    // where the table's one random number puts it. Mixed into every density whole, phi moves each density's inverse CDF
+    // everywhere and undoes the coupling an optimized table is made of (docs/guiding.md).
+    wavelength_table::Table bands;
+    try {
+        bands = wavelength_table::StratifiedTable(kinds.lambdas, SceneSpectrum(kinds), {}, {},
+                                                  double(Lambda_min), double(Lambda_max),
+                                                  "the scene's emission");
+    } catch (const wavelength_table::TableError &e) {
+        throw PbrtError(std::string("wavelength guiding: ") + e.what());
+    }
     std::vector<double> grid = t.grid;
-    grid.insert(grid.end(), kinds.lambdas.begin(), kinds.lambdas.end());
+    grid.insert(grid.end(), bands.grid.begin(), bands.grid.end());
     std::sort(grid.begin(), grid.end());
     grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
     std::array<std::vector<double>, wavelength_table::kNumDensities> values;
     for (int k = 0; k < wavelength_table::kNumDensities; ++k) {
         values[size_t(k)].resize(grid.size());
         for (size_t i = 0; i < grid.size(); ++i)
-            values[size_t(k)][i] = (1 - S) * wavelength_table::Pdf(t, k, grid[i]) +
-                                   S * wavelength_table::detail::Interp(kinds.lambdas, phi, grid[i], 0.0, 0.0);
+            values[size_t(k)][i] =
+                (1 - S) * wavelength_table::Pdf(t, k, grid[i]) + S * wavelength_table::Pdf(bands, k, grid[i]);
     }
     try {
         return wavelength_table::MakeTable(std::move(grid), std::move(values), t.source);
@@ -574,6 +589,30 @@ static std::string TilesText(const WavelengthGuide &g) {
     return tiles.str();
 }
 
+// Each light statement of the scene (deduplicated: the triangles of one area light share it)
+// with its kind, after each kind's spectrum (its lights' emitted power, integral 1) as
+// "# kind K" and "lambda value" lines: what choose-guiding needs to light a copy of the scene
+// by one kind at a time (design §6.8).
+static std::string KindsText(const LightKinds &kinds, const std::string &source) {
+    std::ostringstream s;
+    s << "# wavelength guiding's kinds of light of " << source
+      << " (lights whose spectra are equal up to a scale; design section 1.8)\n";
+    for (size_t k = 0; k < kinds.size(); ++k) {
+        const double sum = wavelength_table::detail::Trapezoid(kinds.lambdas, kinds.power[k]);
+        std::vector<double> v = kinds.power[k];
+        for (double &x : v) x /= sum;
+        s << "# kind " << k << "\n" << MixtureSpectrumText(kinds, v);
+    }
+    s << "kind,light\n";
+    std::set<std::pair<int, std::string>> seen;
+    for (size_t li = 0; li < kinds.kindOfLight.size(); ++li) {
+        if (kinds.kindOfLight[li] < 0) continue;
+        if (seen.insert({kinds.kindOfLight[li], kinds.lightLabels[li]}).second)
+            s << kinds.kindOfLight[li] << "," << Label(kinds.lightLabels[li]) << "\n";
+    }
+    return s.str();
+}
+
 void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &g, const std::string &source) {
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) {
@@ -604,6 +643,7 @@ void WriteGuidingSpectra(const std::string &dir, const WavelengthGuide &g, const
          "# defensive share " << g.settings.defensive
       << "\n" << MixtureSpectrumText(g.kinds, SceneSpectrum(g.kinds));
     WriteTextAtomically(fs::path(dir) / "defensive.txt", d.str());
+    WriteTextAtomically(fs::path(dir) / "kinds.txt", KindsText(g.kinds, source));
 }
 
 std::string GuidingOutputDir(const std::string &imagePath) {

@@ -10,9 +10,10 @@
 //    groups closer than kGuidingMergeDistance), and each group gets one table: the
 //    stratified table of design §1.7 of its mixture spectrum with a defensive share S of the
 //    scene's whole emission mixed in before the cut (StratifiedGuidedTable), or an optimized
-//    table for its mixture spectrum read from a folder, mixed with the same share
-//    (DefensiveGuidedTable). A scene with one kind of light gets exactly one table, the
-//    emission-sampling table (--wavelength-sampling emission).
+//    table for its mixture spectrum read from a folder, mixed with the same share of the
+//    scene's emission cut into four bands, one per density (DefensiveGuidedTable). A scene
+//    with one kind of light gets exactly one table, the emission-sampling table
+//    (--wavelength-sampling emission).
 // 3. The render draws each pixel's wavelengths from the table of its tile (SamplerAt) and
 //    weights them with that table's own four densities (the balance heuristic of design
 //    §1.3): every table is positive wherever any light of the scene emits, and the choice of
@@ -64,6 +65,7 @@ struct LightKinds {
     std::vector<double> luminance;             // per kind: integral of Phi_kind * ybar (> 0)
     std::vector<std::string> labels;           // per kind: FILE:LINE:COL of its strongest light
     std::vector<size_t> lights;                // per kind: how many lights
+    std::vector<std::string> lightLabels;      // per light of the scene: FILE:LINE:COL
     size_t size() const { return power.size(); }
 };
 // Throws PbrtError as SceneEmissionSpectrum does (no emitters, no power, power not finite).
@@ -96,8 +98,11 @@ std::vector<double> SceneSpectrum(const LightKinds &kinds);
 // mixture density is at least S phi / (its mass) wherever the scene emits.
 wavelength_table::Table StratifiedGuidedTable(const LightKinds &kinds, const std::vector<double> &w,
                                               double S, const std::string &weight);
-// (1 - S) p_k + S phi for each density of a given table (an optimized table for a mixture),
-// on the union of its grid and kinds.lambdas: positive wherever the scene emits.
+// (1 - S) p_k + S b_k for each density of a given table (an optimized table for a mixture),
+// b_k the k-th of four equal-mass bands of the scene's emission phi (design §1.7's stratified
+// table of phi), on the union of both grids: the mixture gains (S/4) sum_k b_k = S phi (as
+// from phi in every density), positive wherever the scene emits, and each density keeps its
+// place in u.
 wavelength_table::Table DefensiveGuidedTable(const wavelength_table::Table &t, const LightKinds &kinds,
                                              double S);
 

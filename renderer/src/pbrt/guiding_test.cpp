@@ -189,6 +189,25 @@ TEST(GuidingTables, DefensiveMixtureOfAGivenTable) {
     EXPECT_GT(MixtureAt(t, 600), 0);
     EXPECT_TRUE(wavelength_table::ZeroMixtureIntervals(t).empty() ||
                 MixtureAt(t, 600) > 0);  // zero only where no lamp emits
+    // Each density takes its own quarter of the defensive mass (design §1.8), not all of phi:
+    // outside the given table, density k is S times the k-th equal-mass band of phi, and
+    // wherever the scene emits one band alone is positive (two only at a cut's hand-over).
+    wavelength_table::Table bands =
+        wavelength_table::StratifiedTable(kinds.lambdas, phi, {}, {}, 360, 830, "phi");
+    int emitting = 0, single = 0;
+    for (double l = 360.25; l < 830; l += 0.5) {
+        if (l > 439 && l < 461) continue;
+        int positive = 0;
+        for (int k = 0; k < 4; ++k) {
+            EXPECT_NEAR(wavelength_table::Pdf(t, k, l), S * wavelength_table::Pdf(bands, k, l), 1e-12) << k << " " << l;
+            positive += wavelength_table::Pdf(t, k, l) > 0;
+        }
+        EXPECT_LE(positive, 2) << l;
+        emitting += positive > 0;
+        single += positive == 1;
+    }
+    EXPECT_GT(emitting, 0);
+    EXPECT_GE(single, emitting - 3);
 }
 
 // ---- The guide ------------------------------------------------------------------------------

@@ -81,6 +81,60 @@ def test_the_spectra_folder_agrees_with_a_render(setup, pbrt):
     assert tiles.tile == 3 and tiles.bounds == (0, 0, 24, 18) and tiles.index.shape == (6, 8)
 
 
+def test_kinds_light_the_scene_between_them(setup, pbrt):
+    """kinds.txt names each kind's spectrum and lights (the box's two lamps), and the copies lit
+    by one kind each add up to the copy lit by all (the same paths, split by light), while each
+    kind's copy is dark where only the other kind's lamp shines."""
+    scene, spectra, _, _, _, tmp = setup
+    kinds, lights = G.read_kinds(spectra / "kinds.txt")
+    assert len(kinds) == 2 and all(len(ls) == 1 for ls in lights)
+    assert {line for ls in lights for _, line in ls} == {
+        n for n, text in enumerate(scene.read_text().splitlines(), start=1) if "AreaLightSource" in text}
+    for k in kinds:
+        assert np.trapezoid(k.values, k.wavelengths) == pytest.approx(1.0, rel=1e-6)
+    whole = transfer.of_file(scene, tmp / "work", 0.5, pbrt, 128)
+    T = transfer.kind_transfers(scene, tmp / "work", lights, whole, 0.5, pbrt, 128)
+    assert T.shape == (2,) + whole.t.shape
+    lum = whole.t.sum(axis=1)
+    np.testing.assert_allclose(T.sum(axis=0).sum(axis=1), lum, rtol=0.35, atol=0.02 * lum.max())
+    assert abs(T.sum() / whole.t.sum() - 1) < 0.05
+    # each kind lights a part of the box the other does not dominate
+    share = T.sum(axis=2) / np.maximum(T.sum(axis=(0, 2)), 1e-30)
+    assert share[0].max() > 0.8 and share[1].max() > 0.8
+
+
+def test_a_pixel_lit_by_one_kind_is_predicted_as_under_that_lamp(setup, pbrt):
+    """The per-kind prediction with the other kind's transfer zero is the one-lamp prediction
+    (the stacked bases' extra functions add nothing), and two kinds along the same paths are
+    the one lamp whose spectrum is their sum."""
+    from wavelength_pdf import predict as P
+    from wavelength_pdf.colorimetry import cmfs
+    from wavelength_pdf.evaluation.choose import wavelength_error
+    from wavelength_pdf.spectra import Spectrum
+
+    scene, spectra, _, _, _, tmp = setup
+    kinds, _ = G.read_kinds(spectra / "kinds.txt")
+    whole = transfer.of_file(scene, tmp / "work", 0.5, pbrt, 128)
+    basis = P.hat_basis(whole.centres, transfer.LO, transfer.HI)
+    table = read_table(spectra / "table-0.txt")
+    alone = np.stack([whole.t, np.zeros_like(whole.t)])
+    one = wavelength_error(table, kinds[0], basis, whole, 16)
+    assert wavelength_error(table, kinds, basis, whole, 16, kinds=alone) == pytest.approx(one, rel=1e-9)
+    # Both kinds along the same paths, each at half: the one lamp whose spectrum is their sum,
+    # each kind scaled to the white surface's Y = 1 as the prediction scales every lamp.
+    lam = np.unique(np.concatenate([k.wavelengths for k in kinds]))
+    cwl, cval = cmfs()
+    ybar = np.interp(lam, cwl, cval[:, 1], left=0.0, right=0.0)
+    parts = [np.interp(lam, k.wavelengths, k.values, left=0.0, right=0.0) for k in kinds]
+    summed = Spectrum("sum", "test", lam, sum(e / np.trapezoid(e * ybar, lam) for e in parts))
+    halves = np.stack([0.5 * whole.t, 0.5 * whole.t])
+    assert wavelength_error(table, kinds, basis, whole, 16, kinds=halves) == pytest.approx(
+        wavelength_error(table, summed, basis, whole, 16), rel=2e-3)
+    assert wavelength_error(table, kinds, basis, whole, 16, kinds=halves) != pytest.approx(one, rel=1e-2)
+    with pytest.raises(ValueError, match="kinds"):
+        wavelength_error(table, kinds, basis, whole, 16)
+
+
 def test_defensive_mixing_is_the_renderers(setup, pbrt):
     """A render with a folder of tables samples each as with_defensive makes it."""
     scene, spectra, folders, _, _, tmp = setup

@@ -128,3 +128,23 @@ def test_cut_emitters_keeps_their_shape_inside_the_range(tmp_path: Path, pbrt) -
     scene.write_text('WorldBegin\nLightSource "point" "rgb I" [ 1 1 1 ]\n')
     with pytest.raises(SpectrumError, match="cannot be cut"):
         edit_scene(scene, None, tmp_path / "c" / "d.pbrt", cut_emitters=True)
+
+
+def test_dark_emitters_get_scale_zero_and_the_others_keep_theirs(tmp_path: Path) -> None:
+    """``dark`` names emitters by (file name, line), in the scene and in its Included files; those
+    get "scale" 0 (replacing one they give), the rest are untouched."""
+    src = tmp_path / "scene.pbrt"
+    src.write_text((DATA / "several.pbrt").read_text().replace(
+        'LightSource "spot"', 'LightSource "spot" "float scale" [ 3 ]').replace(
+        '"sub/lights.pbrt"', f'"{DATA / "sub" / "lights.pbrt"}"'))
+    out = edit_scene(src, None, tmp_path / "copy.pbrt", dark={("scene.pbrt", 17), ("scene.pbrt", 18),
+                                                              ("lights.pbrt", 6)})
+    text = out.read_text()
+    assert 'LightSource "point" "float scale" [ 0 ] "rgb I" [ 1 1 1 ]' in text
+    assert 'LightSource "spot" "float scale" [ 0 ]' in text and "[ 3 ]" not in text
+    included = next(tmp_path.glob("include-1-*.pbrt")).read_text()
+    assert 'LightSource "point" "float scale" [ 0 ] "spectrum I"' in included
+    # the area lights and the distant light stay lit
+    assert 'AreaLightSource "diffuse" "spectrum L" [ 400 0 450 10' in text
+    assert 'AreaLightSource "diffuse" "spectrum L" [ 400 0 450 1 ' in included
+    assert 'LightSource "distant"\n' in text
