@@ -1,0 +1,128 @@
+"""The ``pixels`` objective in the image (design §4.6): a lamp's J table polished for one scene's
+pixels at one spp (``optimize.optimize_for_pixels``), against the J table it started from and
+the lamp's own stratified table (design §1.7, the strongest simple sampler under spiky lamps).
+
+For each scene: the lamp's J table (``optimize_spectrum``), the scene's transfer
+(``evaluation.transfer.of_file``, at ``--resolution-scale`` of its size), the polish, each
+table's predicted wavelength error at ``--spp`` and at a quarter and four times it
+(``evaluation.choose.wavelength_error``), then PAIRS seed pairs of each table's render of the
+scene lit by the lamp, alternating table by table, and the benchmark's ``de2`` of each pair
+(the mean over the lit pixels of CIEDE2000(A, B)^2 / 2: no reference needed), with the CPU
+seconds each image records.
+
+    .venv/bin/python scripts/measure_pixels_polish.py --spectrum cie:FL11 --spp 64 --pairs 3 \\
+        --scenes scenes/benchmark/colorchecker/scene.pbrt [--out results.csv]
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "python"))
+
+from wavelength_pdf import predict as P  # noqa: E402
+from wavelength_pdf.evaluation import transfer  # noqa: E402
+from wavelength_pdf.evaluation.benchmark.measures import _delta_e, lit_pixels  # noqa: E402
+from wavelength_pdf.evaluation.choose import wavelength_error  # noqa: E402
+from wavelength_pdf.evaluation.metrics import rgb_to_lab  # noqa: E402
+from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402
+from wavelength_pdf.exr import read_header, read_rgb  # noqa: E402
+from wavelength_pdf.optimize import optimize_for_pixels, optimize_spectrum  # noqa: E402
+from wavelength_pdf.spectra import load_spectrum  # noqa: E402
+from wavelength_pdf.stratified import stratified_table  # noqa: E402
+from wavelength_pdf.table import write_table  # noqa: E402
+
+
+def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[dict]:
+    work.mkdir(parents=True, exist_ok=True)
+    J = optimize_spectrum(spectrum).table
+    tr = transfer.of_file(scene, work / "transfer", a.resolution_scale, a.pbrt, transfer.SPP)
+    start = time.monotonic()
+    polished = optimize_for_pixels(spectrum, J, tr.t, tr.centres, a.spp, incoherence=tr.incoherence,
+                                   terminated=tr.terminated)
+    polish_s = time.monotonic() - start
+    tables = {"lamp": stratified_table(spectrum, "spd"), "J": J, "pixels": polished.table}
+    basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
+    predicted = {name: {spp: wavelength_error(t, spectrum, basis, tr, spp) for spp in (a.spp // 4, a.spp, 4 * a.spp)}
+                 for name, t in tables.items()}
+    for name, t in tables.items():
+        write_table(work / f"{name}.csv", t)
+    lit = edit_scene(scene, spectrum, work / "lit.pbrt")
+    images = {name: [] for name in tables}
+    cpu = {name: [] for name in tables}
+    # One render at a time, the tables alternating seed by seed (a drift of the machine's
+    # speed falls on every table alike).
+    for seed in range(1, 2 * a.pairs + 1):
+        print(f"{scene.parent.name}: seed {seed} of {2 * a.pairs}", file=sys.stderr)
+        for name in tables:
+            out = work / f"{name}-{seed}.exr"
+            r = subprocess.run([str(a.pbrt), "--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp),
+                                "--seed", str(seed), "--wavelength-pdf", str(work / f"{name}.csv"),
+                                "--outfile", str(out), str(lit)], capture_output=True, text=True)
+            if r.returncode != 0:
+                sys.exit(r.stderr)
+            images[name].append(read_rgb(out))
+            cpu[name].append(float(read_header(out)["renderCPUSeconds"]))
+    mask = lit_pixels(np.mean([im for ims in images.values() for im in ims], axis=0))
+    de2 = {name: [float(np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[mask] ** 2) / 2)
+                  for i in range(a.pairs)] for name, ims in images.items()}
+    shown = scene.relative_to(REPO) if scene.is_relative_to(REPO) else scene
+    rows = []
+    for name in tables:
+        e = float(np.mean(de2[name]))
+        rows.append({"scene": str(shown), "spectrum": a.spectrum, "spp": a.spp, "pairs": a.pairs, "table": name,
+                     "de2": f"{e:.5g}", "de2_se": f"{np.std(de2[name], ddof=1) / np.sqrt(a.pairs):.2g}",
+                     "de2_vs_J": f"{e / np.mean(de2['J']):.3f}", "cpu_s": f"{np.mean(cpu[name]):.3f}",
+                     **{f"predicted_{spp}spp": f"{v:.4g}" for spp, v in predicted[name].items()},
+                     "predicted_vs_J": f"{predicted[name][a.spp] / predicted['J'][a.spp]:.3f}",
+                     "polish_s": f"{polish_s:.1f}" if name == "pixels" else ""})
+    return rows
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--spectrum", default="cie:FL11", help="the lamp (a spectrum spec, as `wavelength-pdf optimize`)")
+    ap.add_argument("--scenes", nargs="+", type=Path, default=[REPO / "scenes/benchmark/colorchecker/scene.pbrt"],
+                    help="pbrt-v4 scenes, each relit by the lamp")
+    ap.add_argument("--spp", type=int, default=64, help="the spp the polish aims at and the renders use")
+    ap.add_argument("--pairs", type=int, default=3, help="seed pairs per table")
+    ap.add_argument("--threads", type=int, default=2, help="render threads")
+    ap.add_argument("--resolution-scale", type=float, default=0.25, help="the transfer copy's size")
+    ap.add_argument("--pbrt", type=Path, default=REPO / "build" / "pbrt", help="the renderer")
+    ap.add_argument("--out", type=Path, help="write the rows as CSV here")
+    a = ap.parse_args()
+    if a.spp < 4 or a.pairs < 2:
+        ap.error("--spp must be at least 4 and --pairs at least 2")
+    for s in a.scenes:
+        if not s.is_file():
+            ap.error(f"{s}: no such scene")
+    if not a.pbrt.is_file():
+        ap.error(f"{a.pbrt}: no renderer (bash scripts/setup.sh builds it)")
+    spectrum = load_spectrum(a.spectrum)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, scene in enumerate(a.scenes):
+            rows += measure(scene.resolve(), spectrum, a, Path(tmp) / str(i))
+    w = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]))
+    w.writeheader()
+    w.writerows(rows)
+    if a.out:
+        tmp_out = a.out.with_suffix(a.out.suffix + ".tmp")
+        with open(tmp_out, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        tmp_out.replace(a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
