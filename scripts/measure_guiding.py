@@ -17,7 +17,8 @@ prediction's renders reported apart too, as ``choose_s``), and the floor (emissi
 ``--wavelength-repeats 8``: what is left when wavelength noise is all but gone, design §6.7).
 The renders run one at a time, the samplers alternating seed by seed; the CSV gives each
 sampler's CPU seconds (mean, least, most). ``--per-table`` breaks each sampler's error down by
-the guiding table of the pixels.
+the guiding table of the pixels. Beside ``de2`` the CSV gives ``mean_de``, the mean ΔE00 of the
+pairs over sqrt(2), and its ratios at equal time (it falls as spp^-1/2).
 
     .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3] [--size 80 60]
         [--threads 1] [--samplers ...] [--choose-from white scene] [--out docs/guiding/measurement.csv]
@@ -259,11 +260,14 @@ def main() -> int:
                 pictures(a.pictures, name, mean, maps, index, mask)
             if a.per_table:
                 per_table_rows += per_table(name, a, maps, index, mask, shares)
-            result = {}
+            result, mean_de = {}, {}
             for sampler, pairs in maps.items():
                 de2 = [float(np.mean(m[mask] ** 2) / 2) for m in pairs]
                 result[sampler] = (np.mean(de2), np.std(de2, ddof=1) / np.sqrt(a.pairs) if a.pairs > 1 else np.nan,
                                    float(np.mean(cpu[sampler])))
+                # The mean ΔE00 of a pair over sqrt(2): one image's mean error where the noise
+                # dominates; it falls as spp^-1/2, so equal time takes the slope 1/2.
+                mean_de[sampler] = float(np.mean([np.mean(m[mask]) for m in pairs])) / np.sqrt(2)
             e_em, _, t_em = result["emission"]
             e_gd, _, t_gd = result["guided"]
             floor = result["floor"][0] if "floor" in result else np.nan
@@ -277,6 +281,11 @@ def main() -> int:
                              "de2_vs_visible_equal_time": (f"{equal_time_ratio(de2, t, *result['visible'][::2]):.3f}"
                                                            if "visible" in result else ""),
                              "de2_vs_guided_equal_time": f"{equal_time_ratio(de2, t, e_gd, t_gd):.3f}",
+                             "mean_de": f"{mean_de[sampler]:.4g}",
+                             "mean_de_vs_emission_equal_time":
+                                 f"{equal_time_ratio(mean_de[sampler], t, mean_de['emission'], t_em, 0.5):.3f}",
+                             "mean_de_vs_guided_equal_time":
+                                 f"{equal_time_ratio(mean_de[sampler], t, mean_de['guided'], t_gd, 0.5):.3f}",
                              # the share of emission's error above the floor that is left
                              "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}" if "floor" in result else "",
                              "optimizer_s": (f"{optimizer_s:.1f}" if sampler == "guided-optimized" else
