@@ -42,6 +42,15 @@ def _mean_over_colours(arr: dict, per_colour: Array) -> Array:
     return jnp.sum(arr["weights"] * per_colour) if "weights" in arr else per_colour
 
 
+def _strata_moments(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: Array):
+    """The strata count N, E[C C'] (d, d) with its diagonal's exact part, and m (N, d), the
+    integrals of C over the N equal strata of u, for path colours C (points, d)."""
+    n = arr["strata"].shape[0] + 1
+    idx = jnp.clip(jnp.floor(u * n).astype(jnp.int32), 0, n - 1)
+    second = C.T @ (wt[:, None] * C) + jnp.diag(diag_exact - jnp.sum(wt[:, None] * D, axis=0))
+    return n, second, jax.ops.segment_sum(wt[:, None] * C, idx, num_segments=n)
+
+
 def stratified_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: Array) -> Array:
     """The ``stratified`` objective (design §4.6): sqrt(N tr(M Cov)), Cov the covariance of
     the mean of N samples of C(u), one u in each stratum [i/N, (i+1)/N), and M CIEDE2000's
@@ -53,13 +62,8 @@ def stratified_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_ex
     the second moment (wavelength space), as J's moments do: the quadrature only sees
     C^2 - sum_j (f_j / M_j)^2 there.
     """
-    n = arr["strata"].shape[0] + 1
-    idx = jnp.clip(jnp.floor(u * n).astype(jnp.int32), 0, n - 1)
-
     def one(C, D, diag_exact, M):
-        m = jax.ops.segment_sum(wt[:, None] * C, idx, num_segments=n)  # (n, 3)
-        second = jnp.einsum("p,pa,pb->ab", wt, C, C)
-        second = second + jnp.diag(diag_exact - jnp.sum(wt[:, None] * D, axis=0))
+        n, second, m = _strata_moments(arr, u, wt, C, D, diag_exact)
         cov = second / n - m.T @ m
         return jnp.sqrt(jnp.maximum(n * jnp.sum(M * cov), 0.0))
 
@@ -83,14 +87,10 @@ def pixel_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: 
     O = 4 ∫ f f' / M dλ - c c', one path that kept one wavelength, whose weighted
     integral ``dispersed`` = ∫ f' W_1 f / M is exact (``second_moment``).
     """
-    n = arr["strata"].shape[0] + 1
-    idx = jnp.clip(jnp.floor(u * n).astype(jnp.int32), 0, n - 1)
     K = C.shape[0]
     Cf = jnp.moveaxis(C, 0, 1).reshape(-1, 3 * K)  # (points, K * 3), colour-major
     Df = jnp.moveaxis(D, 0, 1).reshape(-1, 3 * K)
-    S = Cf.T @ (wt[:, None] * Cf)
-    S = S + jnp.diag(diag_exact.reshape(-1) - jnp.sum(wt[:, None] * Df, axis=0))
-    m = jax.ops.segment_sum(wt[:, None] * Cf, idx, num_segments=n)  # (n, K * 3)
+    n, S, m = _strata_moments(arr, u, wt, Cf, Df, diag_exact.reshape(-1))  # m: (n, K * 3)
     mean = jnp.sum(m, axis=0)
     c = arr["c"].reshape(-1)
     V = (jnp.sum(arr["pixel_ws"] * (S / n - m.T @ m)) + jnp.sum(arr["pixel_wi"] * (S - jnp.outer(mean, mean))) / n

@@ -489,28 +489,17 @@ def _lab_jacobians(xyz: np.ndarray) -> np.ndarray:
 
 def xyz_metrics(xyz: np.ndarray) -> np.ndarray:
     """CIEDE2000's local quadratic form in XYZ at each colour (P, 3, 3): A = Jl' G Jl, so that
-    E[CIEDE2000(xyz + e, xyz)^2] ~ tr(A Cov(e)) for a small error e. G is taken in Lab from the
-    even part of the squared difference along the axes and their sums (polarisation), with
-    :func:`lab_quadratic`'s step; it is that function's form as a matrix, for objectives that
-    are linear in a covariance (:func:`pixel_weights`)."""
+    E[CIEDE2000(xyz + e, xyz)^2] ~ tr(A Cov(e)) for a small error e, G the form in Lab
+    (:func:`wavelength_pdf.problem.de2000_metric`, the ``stratified`` objective's): it is
+    :func:`lab_quadratic`'s form as a matrix, for objectives that are linear in a covariance
+    (:func:`pixel_weights`)."""
     import colour
 
+    from wavelength_pdf.problem import de2000_metric
+
     xyz = np.atleast_2d(np.asarray(xyz, dtype=np.float64))
-    lab_c = np.asarray(colour.XYZ_to_Lab(xyz, _white_xy()))
-    eps = 1e-4
-    eye = np.eye(3)
-
-    def even(v):  # the quadratic form's value along the Lab direction v, at every colour
-        return 0.5 * sum(delta_e2000(lab_c + sgn * eps * v, lab_c) ** 2 for sgn in (1.0, -1.0)) / eps ** 2
-
-    axis = [even(e) for e in eye]
-    G = np.empty((xyz.shape[0], 3, 3))
-    for i in range(3):
-        G[:, i, i] = axis[i]
-        for j in range(i + 1, 3):
-            G[:, i, j] = G[:, j, i] = 0.5 * (even(eye[i] + eye[j]) - axis[i] - axis[j])
     jac = _lab_jacobians(xyz)
-    return np.swapaxes(jac, 1, 2) @ G @ jac
+    return np.swapaxes(jac, 1, 2) @ de2000_metric(colour.XYZ_to_Lab(xyz, _white_xy())) @ jac
 
 
 def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.ndarray | None = None,

@@ -355,26 +355,27 @@ _METRIC_STEP = 1e-3
 
 
 def de2000_metric(lab_c: np.ndarray) -> np.ndarray:
-    """G (3, 3) with CIEDE2000(lab_c + e, lab_c)^2 ~ e' G e for small e: the local quadratic
-    form, by central differences of the squared difference (symmetric in +-e, as CIEDE2000's
-    mean chroma makes it slightly odd). Not by automatic differentiation: CIEDE2000 has a
-    square root with a cone point at e = 0."""
+    """G (..., 3, 3) with CIEDE2000(lab_c + e, lab_c)^2 ~ e' G e for small e at each colour of
+    ``lab_c`` (..., 3): the local quadratic form, by central differences of the squared
+    difference (symmetric in +-e, as CIEDE2000's mean chroma makes it slightly odd). Not by
+    automatic differentiation: CIEDE2000 has a square root with a cone point at e = 0."""
     lab_c = jnp.asarray(lab_c, dtype=jnp.float64)
     h = _METRIC_STEP
     eye = np.eye(3)
 
     def q(e):
-        return float(colorimetry.delta_e_2000(lab_c + jnp.asarray(e), lab_c)) ** 2
+        return np.asarray(colorimetry.delta_e_2000(lab_c + jnp.asarray(e), lab_c), dtype=np.float64) ** 2
 
     def even(e):  # the even part: the quadratic form's value along e
         return 0.5 * (q(e) + q(-e))
 
-    G = np.empty((3, 3))
+    G = np.empty(lab_c.shape + (3,))
     for i in range(3):
-        G[i, i] = even(h * eye[i]) / h ** 2
+        G[..., i, i] = even(h * eye[i]) / h ** 2
     for i in range(3):
         for j in range(i + 1, 3):
-            G[i, j] = G[j, i] = (even(h * (eye[i] + eye[j])) - even(h * eye[i]) - even(h * eye[j])) / (2 * h * h)
+            G[..., i, j] = G[..., j, i] = (even(h * (eye[i] + eye[j])) - even(h * eye[i])
+                                           - even(h * eye[j])) / (2 * h * h)
     return G
 
 
