@@ -180,13 +180,20 @@ def optimize_spectrum(
         with single_threaded_blas():
             run = refine(start, run, budget.with_evaluations(_refine_evaluations(max_evaluations)),
                          progress=progress)
+    return _judged(problem, start, run, grid, t0, name=getattr(spectrum, "name", ""),
+                   source=_source(spectrum, reflectances), solver=solver, seed=seed,
+                   objective=objective_label(objective, objective_spp))
+
+
+def _judged(problem, start: Start, run, grid: np.ndarray, t0: float, **record) -> Result:
+    """The search's table judged by §4.4's rules against its start, in ``problem``'s
+    objective, with the seconds since ``t0``; ``record``: name, source, solver, seed,
+    objective."""
     result = Result.judge(
         Table(grid=grid.copy(), pdfs=run.P), J=run.J, J_fine=objective_mod.J(problem, run.P, ORDER_FINE),
         J_uniform=start.J_uniform, J_init=start.J,
         health=run.health if run.health is not None else health_mod.health(problem, run.P),
-        health_init=start.health, name=getattr(spectrum, "name", ""),
-        source=_source(spectrum, reflectances), solver=solver, seed=seed, history=list(run.history),
-        message=run.message, objective=objective_label(objective, objective_spp))
+        health_init=start.health, history=list(run.history), message=run.message, **record)
     result.seconds = time.monotonic() - t0
     return result
 
@@ -229,15 +236,9 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     found = SolverResult(P=P_from, J=objective_mod.J(problem, P_from), message="from the given table")
     with single_threaded_blas():
         run = refine(start, found, Budget.starting(max_evaluations, None, t0), progress=progress)
-    result = Result.judge(
-        Table(grid=grid.copy(), pdfs=run.P), J=run.J, J_fine=objective_mod.J(problem, run.P, ORDER_FINE),
-        J_uniform=start.J_uniform, J_init=start.J,
-        health=run.health if run.health is not None else health_mod.health(problem, run.P),
-        health_init=start.health, name=getattr(spectrum, "name", ""),
-        source=f"{getattr(spectrum, 'source', '')}; pixels: {t.shape[0]} of a scene", solver="polish", seed=0,
-        history=list(run.history), message=run.message, objective=objective_label("pixels", spp))
-    result.seconds = time.monotonic() - t0
-    return result
+    return _judged(problem, start, run, grid, t0, name=getattr(spectrum, "name", ""),
+                   source=f"{getattr(spectrum, 'source', '')}; pixels: {t.shape[0]} of a scene", solver="polish",
+                   seed=0, objective=objective_label("pixels", spp))
 
 
 @float64
