@@ -290,10 +290,8 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         predicted = {}
         for name, table in tables[k].items():
             say(f"choose-guiding: table {k} ({mix}), predicting {name}")
-            if kinds is None:
-                predicted[name] = wavelength_error(table, lamps[k], basis, tr, spp, pixel_sampler, sel)
-            else:
-                predicted[name] = wavelength_error(table, kind_spectra, basis, tr, spp, pixel_sampler, sel, kinds)
+            predicted[name] = wavelength_error(table, lamps[k] if kinds is None else kind_spectra, basis, tr, spp,
+                                               pixel_sampler, sel, kinds)
         best = min((n for n in predicted if n != EMISSION), key=predicted.get, default=EMISSION)
         chosen = best if predicted[best] < (1 - margin) * predicted[EMISSION] else EMISSION
         choices.append(MixtureChoice(k, mix, int(pixels.sum()), predicted, chosen))
