@@ -226,6 +226,13 @@ PlyMesh ParsePly(const std::string &data, const std::string &path) {
                 end != countText.data() + countText.size() || !extra.empty())
                 throw headerError("bad element line \"" + line + "\" (expected: element NAME COUNT)");
             e.count = size_t(count);
+            // One vertex and one face element: a second would leave the normals, texture
+            // coordinates or face indices of one of them without entries for the other's
+            // vertices or triangles (the fuzzer found both).
+            if (e.name == "vertex" || e.name == "face")
+                for (const Element &prev : elements)
+                    if (prev.name == e.name)
+                        throw headerError("a second \"" + e.name + "\" element (a mesh has one)");
             elements.push_back(std::move(e));
         } else if (keyword == "property") {
             if (elements.empty()) throw headerError("property before any element");
