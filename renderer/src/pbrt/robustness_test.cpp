@@ -359,6 +359,20 @@ TEST(Robustness, SceneSeedsAndRegressionsLoadOrFailCleanly) {
     }
 }
 
+TEST(Robustness, AnEmptyMaterialNameIsANameLikeAnyOther) {
+    // NamedMaterial "" once read as "no name" and indexed the materials at -1 (the fuzzer's
+    // regressions/scene/named-material-empty-name.pbrt): "" is refused while undefined, and
+    // once MakeNamedMaterial defines it, it is that material.
+    RenderOptions opts;
+    EXPECT_NE(LoadError("WorldBegin\nNamedMaterial \"\"\nShape \"sphere\"\n", opts, "e.pbrt")
+                  .find("e.pbrt:2:1: NamedMaterial \"\" is not defined"),
+              std::string::npos);
+    EXPECT_EQ(LoadError("WorldBegin\nMakeNamedMaterial \"\" \"string type\" \"diffuse\"\n"
+                        "NamedMaterial \"\"\nShape \"sphere\"\n",
+                        opts, "e.pbrt"),
+              "");
+}
+
 TEST(Robustness, PlySeedsAndRegressionsReadOrFailCleanly) {
     // The seeds, and the regression kept from a hang (empty-element-*), are meshes; the
     // other regressions (inputs that once crashed) must be refused with a message naming the

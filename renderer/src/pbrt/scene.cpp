@@ -125,8 +125,9 @@ ParsedParameterVector Concat(ParsedParameterVector a, const ParsedParameterVecto
 
 struct MaterialRef {
     int index = -1;          // anonymous material (Material directive) or default
-    std::string name;        // NamedMaterial
+    std::string name;        // NamedMaterial (any string, "" too: the fuzzer found it)
     FileLoc loc;
+    bool named = false;      // set by NamedMaterial: name, not index, says which
 };
 
 struct AreaLightDesc {
@@ -340,7 +341,7 @@ class SceneBuilder : public ParserTarget {
     }
     void NamedMaterial(const std::string &name, FileLoc loc) override {
         RequireWorld("NamedMaterial", loc);
-        graphicsState.material = MaterialRef{-1, name, loc};
+        graphicsState.material = MaterialRef{-1, name, loc, true};
     }
     void LightSource(const std::string &name, ParsedParameterVector params, FileLoc loc) override;
     void AreaLightSource(const std::string &name, ParsedParameterVector params, FileLoc loc) override {
@@ -428,7 +429,7 @@ class SceneBuilder : public ParserTarget {
         return m;
     }
     int ResolveMaterial(const MaterialRef &ref) const {
-        if (ref.name.empty()) return ref.index;
+        if (!ref.named) return ref.index;
         auto it = namedMaterials.find(ref.name);
         if (it == namedMaterials.end())
             throw PbrtError(ref.loc, "NamedMaterial \"" + ref.name + "\" is not defined");
