@@ -387,4 +387,22 @@ PlyMesh ParsePly(const std::string &data, const std::string &path) {
     return mesh;
 }
 
+std::string PlyMeshBrokenPromise(const PlyMesh &m) {
+    if (m.indices.empty() || m.indices.size() % 3 != 0)
+        return std::to_string(m.indices.size()) + " indices, not a positive multiple of 3";
+    for (int i : m.indices)
+        if (i < 0 || size_t(i) >= m.P.size())
+            return "vertex index " + std::to_string(i) + " out of range (" + std::to_string(m.P.size()) +
+                   " vertices)";
+    if (!m.N.empty() && m.N.size() != m.P.size())
+        return std::to_string(m.N.size()) + " normals for " + std::to_string(m.P.size()) + " vertices";
+    if (!m.uv.empty() && m.uv.size() != m.P.size())
+        return std::to_string(m.uv.size()) + " texture coordinates for " + std::to_string(m.P.size()) +
+               " vertices";
+    if (!m.faceIndices.empty() && m.faceIndices.size() != m.indices.size() / 3)
+        return std::to_string(m.faceIndices.size()) + " face indices for " +
+               std::to_string(m.indices.size() / 3) + " triangles";
+    return "";
+}
+
 }  // namespace pbrt

@@ -31,4 +31,10 @@ PlyMesh ReadPly(const std::string &path);
 // The same for a PLY file's bytes held in memory; `path` names it in error messages.
 PlyMesh ParsePly(const std::string &data, const std::string &path);
 
+// Which of PlyMesh's promises above `m` breaks (at least one triangle, indices in range, N,
+// uv and faceIndices each empty or of full length), or "" when it keeps them all: the one
+// statement of them that the fuzz target (renderer/fuzz/ply_fuzz.cpp) and the robustness
+// test check every mesh the reader returns against.
+std::string PlyMeshBrokenPromise(const PlyMesh &m);
+
 }  // namespace pbrt

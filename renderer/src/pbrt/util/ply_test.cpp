@@ -296,3 +296,28 @@ TEST(Ply, EvaluationSceneMeshes) {
     }
     EXPECT_GT(files, 0);
 }
+
+TEST(Ply, BrokenPromiseNamesEachBrokenPromise) {
+    // The oracle the fuzz target and the robustness test share: silent on a whole mesh, and
+    // naming each promise a mesh can break.
+    PlyMesh ok;
+    ok.P = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    ok.indices = {0, 1, 2};
+    EXPECT_EQ(PlyMeshBrokenPromise(ok), "");
+    ok.N = ok.P;
+    ok.uv = {{0, 0}, {1, 0}, {0, 1}};
+    ok.faceIndices = {7};
+    EXPECT_EQ(PlyMeshBrokenPromise(ok), "");
+    auto broken = [&](auto change, const std::string &what) {
+        PlyMesh m = ok;
+        change(m);
+        EXPECT_NE(PlyMeshBrokenPromise(m).find(what), std::string::npos) << PlyMeshBrokenPromise(m);
+    };
+    broken([](PlyMesh &m) { m.indices.clear(); }, "0 indices");
+    broken([](PlyMesh &m) { m.indices.push_back(0); }, "4 indices");
+    broken([](PlyMesh &m) { m.indices[1] = 3; }, "vertex index 3 out of range");
+    broken([](PlyMesh &m) { m.indices[1] = -1; }, "vertex index -1");
+    broken([](PlyMesh &m) { m.N.pop_back(); }, "2 normals for 3 vertices");
+    broken([](PlyMesh &m) { m.uv.push_back({0, 0}); }, "4 texture coordinates");
+    broken([](PlyMesh &m) { m.faceIndices.push_back(1); }, "2 face indices for 1 triangles");
+}
