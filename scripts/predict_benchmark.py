@@ -50,10 +50,15 @@ def main(argv=None) -> int:
     ap.add_argument("--pbrt", type=Path, default=None,
                     help="with --colours scene or pixels: the renderer (default: as design §7)")
     ap.add_argument("--only", nargs="+", default=None, metavar="PREFIX", help="only jobs whose name starts so")
+    ap.add_argument("--pool", type=Path, nargs="+", default=None, metavar="CSV",
+                    help="render and predict nothing: print the Spearman table over the pairs of these "
+                         "prediction.csv files pooled (the candidates they all have) and exit")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
 
     say = (lambda m: None) if a.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    if a.pool:
+        return pool(a.pool)
     results = a.results or (a.outdir / "results.csv")
     if a.results is None and not results.is_file():
         results = HERE.parent / "docs" / "benchmark" / "results.csv"
@@ -120,6 +125,26 @@ def main(argv=None) -> int:
         print(BP.choices_markdown(ch))
     say(f"predict_benchmark: {len(jobs)} jobs, {len(prs)} pairs in {time.time() - t0:.0f} s; "
         f"wrote {a.docs / 'prediction.csv'}, prediction-summary.csv, prediction.png")
+    return 0
+
+
+def pool(paths) -> int:
+    """Spearman over several prediction.csv files' pairs together (e.g. two sweeps)."""
+    from wavelength_pdf.evaluation.benchmark import predict as BP
+
+    prs, cands = [], None
+    for path in paths:
+        try:
+            more, cs = BP.read_pairs(path)
+        except (OSError, ValueError) as e:
+            print(f"predict_benchmark: {e}", file=sys.stderr)
+            return 2
+        prs += more
+        cands = cs if cands is None else [c for c in cands if c in cs]
+    if not cands:
+        print("predict_benchmark: the files have no prediction in common", file=sys.stderr)
+        return 2
+    print(BP.markdown([s for s in BP.summary(prs, cands) if s["regime"] == "all"]))
     return 0
 
 

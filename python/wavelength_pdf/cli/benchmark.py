@@ -15,7 +15,6 @@ def cmd_benchmark(args) -> int:
     from wavelength_pdf.evaluation.benchmark import copy_report, run_benchmark
     from wavelength_pdf.renderer import find_pbrt
 
-    find_pbrt(args.pbrt)  # exit 2 before any work when there is no renderer (design §7)
     if args.sweep == "small":
         spec = G.small_grid(args.shared)
     else:
@@ -23,6 +22,12 @@ def cmd_benchmark(args) -> int:
         if args.sweep != "all":
             spec = G.select(spec, [args.sweep])
     spec = G.select(spec, args.only)
+    try:
+        spec = G.with_rows(spec, args.rows)
+    except ValueError as e:
+        print(f"wavelength-pdf benchmark: --rows: {e}", file=sys.stderr)
+        return 2
+    find_pbrt(args.pbrt)  # exit 2 before any work when there is no renderer (design §7)
     if args.list:
         for j in spec.jobs:
             print(j.name)
@@ -58,6 +63,10 @@ def add_parser(sub, out: Path) -> None:
                         "box, as the test suite runs it)")
     b.add_argument("--only", nargs="+", default=None, metavar="PREFIX",
                    help="only the jobs whose name (SCENE/LAMP/PIXEL-SAMPLER, see --list) starts with one of these")
+    b.add_argument("--rows", nargs="+", default=None, metavar="ROW",
+                   help="render and score only these rows of each job (" + ", ".join(G.ROWS) + "); "
+                        "the floor, the reference and pbrt-v4's own visible sampling are always rendered "
+                        "(default: every row of the job)")
     b.add_argument("--list", action="store_true", help="list the jobs and exit")
     b.add_argument("-o", "--outdir", type=Path, default=out / "benchmark", help="output folder (default out/benchmark)")
     b.add_argument("--shared", type=Path, default=G.SHARED,

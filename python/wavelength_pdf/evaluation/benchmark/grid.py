@@ -18,6 +18,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Sequence
 
 from wavelength_pdf.data import CHECKOUT
 
@@ -151,6 +152,9 @@ COLOUR_ROWS = (SCENE_COLOURS, PIXEL_SCENE)
 #: one per lamp like ``optimized``, rendered on the scene sweep, whose scenes show other
 #: colours, to see whether colours the table was not made for still gain over white.
 GENERIC_COLOURS = "optimized-colorchecker"
+#: Every row a job can list (a lamp's earlier-work ``reference`` table, the check row and the
+#: floor are added by the job's plan, not listed).
+ROWS = (*TABLE_ROWS, *COLOUR_ROWS, GENERIC_COLOURS)
 #: The simple samplers (no optimizer): "the best simple sampler" is the best of these.
 SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
 #: Check row: pbrt-v4's own visible sampling, which the ``visible`` table must match.
@@ -227,7 +231,11 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
         for lamp in LAMPS.values():
             # The ColorChecker is what its patches show: tables for them too (the objective's
             # colours, design §4.5, measured under every lamp).
-            add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), floor_spp=(16,), sweep="lamps",
+            # The floor costs eight renders' paths: the Cornell box's at 16 spp only, the
+            # ColorChecker's (a fraction of a second each) at both, so that its 64 spp jobs are
+            # measured against a floor of their own, not the 16 spp one scaled.
+            add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), sweep="lamps",
+                       floor_spp=(16, 64) if s == "colorchecker" else (16,),
                        rows=TABLE_ROWS + (COLOUR_ROWS if s == "colorchecker" else ())))
     for s in SCENES.values():
         if s.key in ("project-box", "two-lamp-box"):
@@ -276,6 +284,18 @@ def add(g: GridSpec, job: Job) -> None:
         g.skipped.append(f"{job.name}: {job.lamp.spec(g.shared)} is not present")
     else:
         g.jobs.append(job)
+
+
+def with_rows(g: GridSpec, rows: Sequence[str] | None) -> GridSpec:
+    """Each job with only those of its rows named in ``rows`` (the floor and the reference
+    are not rows: every job keeps them); None keeps every row."""
+    if rows is None:
+        return g
+    unknown = sorted(set(rows) - set(ROWS))
+    if unknown:
+        raise ValueError(f"unknown rows {', '.join(unknown)}; the rows are {', '.join(ROWS)}")
+    return GridSpec([replace(j, rows=tuple(r for r in j.rows if r in rows)) for j in g.jobs],
+                    g.shared, g.skipped)
 
 
 def select(g: GridSpec, only: list[str] | None) -> GridSpec:

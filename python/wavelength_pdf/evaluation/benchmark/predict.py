@@ -385,6 +385,24 @@ def write_csv(path: Path, prs: Sequence[dict], candidates: Sequence[str]) -> Non
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in p.items()})
 
 
+def read_pairs(path: Path) -> tuple[list[dict], list[str]]:
+    """The pairs and candidates of a ``prediction.csv`` that :func:`write_csv` wrote."""
+    with open(path, newline="") as f:
+        reader = csv.DictReader(f)
+        cols = list(reader.fieldnames or [])
+        if "measured" not in cols:
+            raise ValueError(f"{path}: not a prediction.csv (no 'measured' column)")
+        cands = cols[cols.index("measured") + 1:]
+        prs = []
+        for line, r in enumerate(reader, start=2):
+            try:
+                p = {**r, "spp": int(r["spp"]), **{k: float(r[k]) for k in ("measured", *cands)}}
+            except (TypeError, ValueError) as e:
+                raise ValueError(f"{path}:{line}: {e}") from None
+            prs.append(p)
+    return prs, cands
+
+
 def plot(path: Path, prs: Sequence[dict], candidates: Sequence[str], rows: Sequence[str] = G.SIMPLE) -> None:
     """Predicted against measured ratio (row / table), log-log, one colour per candidate, a
     panel per spp."""
@@ -420,8 +438,9 @@ def plot(path: Path, prs: Sequence[dict], candidates: Sequence[str], rows: Seque
 def markdown(summ: Sequence[dict]) -> str:
     """The Spearman table: a row per candidate, a column per regime and spp."""
     cands = list(dict.fromkeys(s["candidate"] for s in summ))
-    cols = [(spp, reg) for spp in sorted({s["spp"] for s in summ}) for reg in ("all", *REGIMES)]
     get = {(s["candidate"], s["spp"], s["regime"]): s for s in summ}
+    cols = [(spp, reg) for spp in sorted({s["spp"] for s in summ}) for reg in ("all", *REGIMES)
+            if any((c, spp, reg) in get for c in {s["candidate"] for s in summ})]
     head = "| prediction | " + " | ".join(f"{reg}, {spp} spp" for spp, reg in cols) + " |\n|---|" + "---|" * len(cols)
     lines = [head]
     for c in cands:

@@ -97,6 +97,31 @@ def test_grid_has_the_lamps_and_scenes_it_promises():
         assert not g.jobs and len(g.skipped) == 3
 
 
+def test_rows_can_be_narrowed_and_the_colorchecker_has_a_floor_at_each_spp():
+    g = G.small_grid()
+    assert G.with_rows(g, None) is g
+    narrow = G.with_rows(g, ["spd", "optimized"])
+    # Each job keeps only the named rows it had (the small grid has no optimized row), in its order.
+    assert [j.rows for j in narrow.jobs] == [("spd",)] * len(g.jobs)
+    assert [j.name for j in narrow.jobs] == [j.name for j in g.jobs]
+    assert [j.floor_spp for j in narrow.jobs] == [j.floor_spp for j in g.jobs]
+    with pytest.raises(ValueError, match="unknown rows floor, sdp"):
+        G.with_rows(g, ["spd", "sdp", "floor"])
+    # The lamp sweep's ColorChecker is measured against a floor of its own at every spp; the
+    # Cornell box's (eight times a render's paths) at 16 spp only.
+    for j in G.select(G.full_grid(), ["lamps"]).jobs:
+        if j.sweep == "lamps":
+            assert j.floor_spp == (j.spp if j.scene.key == "colorchecker" else (16,)), j.name
+
+
+def test_benchmark_refuses_unknown_rows_before_any_work(tmp_path, capsys):
+    from wavelength_pdf.cli import main
+
+    assert main(["benchmark", "--sweep", "small", "-o", str(tmp_path / "out"), "--rows", "spd", "nonsense"]) == 2
+    assert "--rows: unknown rows nonsense" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_optimized_rows_name_the_colours_their_tables_are_made_for(tmp_path):
     """The optimizer's inputs per row: white for the lamp's tables, the scene's colours for the
     scene rows, the ColorChecker's 24 patches for the generic-colour row (a lamp table, in

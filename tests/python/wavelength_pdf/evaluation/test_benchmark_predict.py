@@ -110,6 +110,37 @@ def test_summary_ranks():
     assert s[("same", "all")]["pairs"] == 40 and s[("same", "colorchecker")]["pairs"] == 20
 
 
+def test_pairs_round_trip_and_pool_over_files(tmp_path, capsys):
+    """prediction.csv reads back as written, and --pool ranks the pairs of several files
+    together: two files whose predictions rank each file's pairs perfectly but sit at scales
+    apart pool to less than 1."""
+    from scipy.stats import spearmanr
+
+    rng = np.random.default_rng(1)
+    files, meas, pred = [], [], []
+    for k, scale in enumerate((1.0, 30.0)):
+        m = np.exp(rng.normal(size=12))
+        prs = [{"job": f"s{k}/lamp/sobol", "regime": "scenes", "scene": f"s{k}", "lamp": "lamp",
+                "pixel_sampler": "sobol", "spp": 64, "row": "uniform", "measured": float(x),
+                "good": float(x * scale)} for x in m]
+        path = tmp_path / f"prediction-{k}.csv"
+        BP.write_csv(path, prs, ["good"])
+        back, cands = BP.read_pairs(path)
+        assert cands == ["good"] and len(back) == len(prs)
+        assert [(p["spp"], p["row"]) for p in back] == [(64, "uniform")] * len(prs)
+        np.testing.assert_allclose([p["good"] for p in back], [p["good"] for p in prs], rtol=1e-5)
+        files.append(str(path))
+        meas += list(m)
+        pred += [x * scale for x in m]
+    assert _script().main(["--pool", *files]) == 0
+    expected = spearmanr(pred, meas).statistic
+    assert expected < 0.99
+    assert f"| good | {expected:.2f} (" in capsys.readouterr().out
+    (tmp_path / "other.csv").write_text("a,b\n1,2\n")
+    assert _script().main(["--pool", files[0], str(tmp_path / "other.csv")]) == 2
+    assert "other.csv: not a prediction.csv" in capsys.readouterr().err
+
+
 def test_script_refuses_before_work_when_the_benchmark_is_missing(tmp_path, capsys):
     code = _script().main(["-o", str(tmp_path / "none"), "--shared", str(tmp_path / "none-shared"),
                            "--docs", str(tmp_path / "docs"), "--quiet"])
