@@ -33,8 +33,9 @@ namespace {
 // by MIS against BSDF sampling.
 SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const BSDF &bsdf,
                          const SampledWavelengths &lambda, Sampler &sampler,
-                         SampledSpectrumCache &spectra, int *lightOut) {
+                         SampledSpectrumCache &spectra, int *lightOut, const Float *uLightGiven) {
     Float uLight = sampler.Get1D();
+    if (uLightGiven) uLight = *uLightGiven;
     Point2f u = sampler.Get2D();
     Float pmf;
     int li = scene.lightSampler.Sample(uLight, &pmf);
@@ -65,7 +66,8 @@ SampledSpectrum SampleLd(const Scene &scene, const SurfaceInteraction &si, const
 }  // namespace
 
 SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
-                       Sampler &sampler, int maxDepth, int *depthOut, LightContributions *byLight) {
+                       Sampler &sampler, int maxDepth, int *depthOut, LightContributions *byLight,
+                       const Float *uFirstLight) {
     SampledSpectrum L(0), beta(1);
     int depth = 0, skips = 0;
     Float p_b = 1, etaScale = 1;
@@ -145,7 +147,8 @@ SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
 
         if (bsdf->IsNonSpecular()) {
             int li = -1;
-            SampledSpectrum c = beta * SampleLd(scene, si, *bsdf, lambda, sampler, spectra, &li);
+            SampledSpectrum c = beta * SampleLd(scene, si, *bsdf, lambda, sampler, spectra, &li, uFirstLight);
+            uFirstLight = nullptr;
             L += c;
             if (byLight && li >= 0) byLight->Add(li, c);
         }

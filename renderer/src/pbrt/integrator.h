@@ -46,8 +46,11 @@ struct LightContributions {
 // must weight the result with lambda as it is after the call. `depth`, when given, receives
 // the number of surfaces with a material the path reached (the last one, where maxdepth or
 // Russian roulette ended it, included). `byLight`, when given, receives each light's terms.
+// `uFirstLight`, when given, replaces the sampler's number for the first next-event
+// estimation's choice of light (--wavelength-net, samplers.h); the sampler's number is drawn
+// anyway, so that the path's other dimensions stay where they were.
 SampledSpectrum PathLi(const Scene &scene, Ray ray, SampledWavelengths &lambda,
                        Sampler &sampler, int maxDepth, int *depth = nullptr,
-                       LightContributions *byLight = nullptr);
+                       LightContributions *byLight = nullptr, const Float *uFirstLight = nullptr);
 
 }  // namespace pbrt

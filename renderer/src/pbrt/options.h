@@ -38,6 +38,9 @@ struct RenderOptions {
     // --disable-pixel-jitter, --disable-wavelength-jitter: as the scene's Option statements of
     // those names (pixel centres; the same wavelengths for every path).
     bool disablePixelJitter = false, disableWavelengthJitter = false;
+    // --wavelength-net: film position, wavelength number and first light choice from one net
+    // per pixel (design §5.2).
+    bool wavelengthNet = false;
     // Wavelength sampling (design §5): "visible" (pbrt-v4's default), "uniform" over
     // [lambdaMin, lambdaMax] (stratified), or "emission" (a table built from the scene's
     // emitted power times emissionWeight, design §1.7; emission.h).

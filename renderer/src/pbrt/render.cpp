@@ -29,6 +29,7 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     m.floats["renderCPUSeconds"] = float(stats.cpuSeconds);
     m.floats["meanPathDepth"] = stats.paths ? float(double(stats.scatterings) / double(stats.paths)) : 0.f;
     if (stats.wavelengthRepeats > 1) m.ints["wavelengthRepeats"] = stats.wavelengthRepeats;
+    if (scene.wavelengthNet) m.ints["wavelengthNet"] = 1;
     m.strings["seed"] = std::to_string(scene.sampler.Seed());
     // pbrt-v4's camera matrices (cameras.h), row by row.
     auto rows = [](const SquareMatrix4 &a) {
@@ -108,6 +109,8 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                         Point2i p{x, y};
                         // Wavelength guiding: the pixel's own table (design §1.8).
                         const WavelengthSampler &wavelengths = guide ? guide->SamplerAt(p) : scene.wavelengths;
+                        std::optional<WavelengthNet> net;
+                        if (scene.wavelengthNet) net.emplace(p, scene.sampler.Seed());
                         for (int s = s0; s < s1; ++s) {
                             RGB rgb(0, 0, 0);
                             FilterSample fs;
@@ -115,13 +118,17 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                                 // A repeat replays the sample's numbers from its start; only the
                                 // wavelength number is shifted (r = 0: the sample as it is).
                                 sampler.StartPixelSample(p, s);
-                                // Film position from the filter's distribution around the pixel centre.
                                 Point2f uFilter = sampler.GetPixel2D();
+                                // Four wavelengths from one number: the seam for other samplers.
+                                Float uLambda = sampler.Get1D();
+                                // Both drawn from the sampler either way, so that the path's
+                                // dimensions are the same with and without the net.
+                                Float uLight = 0;
+                                if (net) net->Sample(s, &uFilter, &uLambda, &uLight);
+                                // Film position from the filter's distribution around the pixel centre.
                                 fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
                                                               : scene.filter.Sample(uFilter);
                                 Point2f pFilm(x + 0.5f + fs.p.x, y + 0.5f + fs.p.y);
-                                // Four wavelengths from one number: the seam for other samplers.
-                                Float uLambda = sampler.Get1D();
                                 if (scene.disableWavelengthJitter) uLambda = 0.5f;
                                 if (r > 0) {
                                     uLambda += Float(r) / Float(repeats);
@@ -131,7 +138,8 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                                 Point2f uLens = sampler.Get2D();
                                 Ray ray = scene.camera->GenerateRay(pFilm, uLens);
                                 int depth = 0;
-                                SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth, &depth);
+                                SampledSpectrum L = PathLi(scene, ray, lambda, sampler, maxDepth, &depth, nullptr,
+                                                           net ? &uLight : nullptr);
                                 depthSum += uint64_t(depth);
                                 if (!IsFinite(L)) {
                                     WarnNonFinite(scene, ray);

@@ -53,6 +53,7 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
 //   renderCPUSeconds          float   CPU seconds (user + system, all threads) of the render
 //   meanPathDepth             float   surfaces a camera path reached (at most maxdepth + 1), averaged
 //   wavelengthRepeats         int     K of --wavelength-repeats (only when K > 1)
+//   wavelengthNet             int     1 with --wavelength-net (absent otherwise)
 //   wavelengthEmissionWeight  string  with emission sampling (and guiding): its weight, "spd", "luminance" or "xyz"
 // With wavelength guiding (guiding.h, AddGuidingMetadata; renderCPUSeconds then includes the
 // pre-pass and the tables):

@@ -416,4 +416,19 @@ Point2f Sampler::GetPixel2D() {
     return Get2D();
 }
 
+WavelengthNet::WavelengthNet(Point2i p, uint64_t seed) {
+    const uint64_t h = HashInts({uint64_t(uint32_t(p.x)), uint64_t(uint32_t(p.y)), seed, 0x6e6574ULL});
+    for (uint64_t d = 0; d < 4; ++d) scramble[d] = uint32_t(MixBits(h ^ (d + 1)));
+}
+
+void WavelengthNet::Sample(int sampleIndex, Point2f *uFilm, Float *uLambda, Float *uLight) const {
+    // Sample index i of the pixel's own sequence: the net needs the pixel's samples to be
+    // consecutive Sobol' points, which the image-wide "sobol" sampler's are not.
+    const uint32_t i = uint32_t(sampleIndex);
+    *uFilm = {ToUnitFloat(OwenScramble(SobolDim0(i), scramble[0])),
+              ToUnitFloat(OwenScramble(SobolDim1(i), scramble[1]))};
+    *uLambda = ToUnitFloat(OwenScramble(SobolDim2(i), scramble[2]));
+    *uLight = ToUnitFloat(OwenScramble(SobolDim3(i), scramble[3]));
+}
+
 }  // namespace pbrt

@@ -118,4 +118,25 @@ class Sampler {
     RNG rng;
 };
 
+// --wavelength-net (design §5.2): the numbers of sample `sampleIndex` of pixel p that decide
+// which spectrum the sample sees, drawn together with its wavelength number: dimensions 0-3 of
+// the Sobol' sequence, each Owen-scrambled by a hash of the pixel, the dimension and seed, give
+// the film position (0, 1), the wavelength number (2) and the first next-event estimation's
+// choice of light (3). A pixel's first 2^m samples are then a (1, m, 3)-net in position and
+// wavelength and, for m >= 4, a (1, m, 2)-net in wavelength and light: the samples that land
+// on one side of an edge in the pixel, or that pick one lamp, still have wavelength numbers
+// spread over [0, 1). Every pixel sampler draws these from separate dimensions, so a pixel's
+// stratified wavelengths are stratified only over all of its samples together, and where its
+// samples see different spectra that removes little. Each point is uniform on [0, 1)^4 and
+// independent of the sampler's other dimensions: unbiased. Made once per pixel (the scrambles'
+// seeds), then asked for each sample.
+class WavelengthNet {
+  public:
+    WavelengthNet(Point2i p, uint64_t seed);
+    void Sample(int sampleIndex, Point2f *uFilm, Float *uLambda, Float *uLight) const;
+
+  private:
+    uint32_t scramble[4];
+};
+
 }  // namespace pbrt

@@ -476,3 +476,45 @@ TEST(Samplers, CreateReadsTheSamplerDirective) {
     refused([&] { create("lowdiscrepancy", {}); }, "scene.pbrt:4:1", "zsobol");
     refused([&] { Sampler::Create("zsobol", {}, 0, std::nullopt, 1 << 20, loc, {1 << 30, 4}); }, "scene.pbrt:4:1", "64");
 }
+
+TEST(Samplers, WavelengthNetStratifiesEachPartOfAPixelAndEachLightChoice) {
+    // A pixel's 64 samples: wavelength numbers one per 1/64; those in either half of the pixel
+    // two per 1/16; those whose light number picks a quarter of [0, 1) two per 1/8. Plus
+    // uniformity over many pixels, and other pixels and seeds giving other points.
+    const int n = 64;
+    auto stratum = [](Float u, int k) { return int(u * Float(k)); };
+    double sum[4] = {0, 0, 0, 0};
+    int count = 0;
+    for (uint64_t seed : {1u, 2u})
+        for (int py = 0; py < 8; ++py)
+            for (int px = 0; px < 8; ++px) {
+                std::vector<int> all(n, 0), left(16, 0), right(16, 0), quarter[4];
+                for (auto &q : quarter) q.assign(8, 0);
+                for (int i = 0; i < n; ++i) {
+                    Point2f f;
+                    Float l, light;
+                    WavelengthNet({px, py}, seed).Sample(i, &f, &l, &light);
+                    for (Float v : {f.x, f.y, l, light}) ASSERT_TRUE(v >= 0 && v < 1);
+                    ++all[size_t(stratum(l, n))];
+                    ++(f.x < 0.5f ? left : right)[size_t(stratum(l, 16))];
+                    ++quarter[stratum(light, 4)][size_t(stratum(l, 8))];
+                    sum[0] += f.x, sum[1] += f.y, sum[2] += l, sum[3] += light;
+                    ++count;
+                }
+                for (int c : all) EXPECT_EQ(c, 1);
+                for (int c : left) EXPECT_EQ(c, 2);
+                for (int c : right) EXPECT_EQ(c, 2);
+                for (const auto &q : quarter)
+                    for (int c : q) EXPECT_EQ(c, 2);
+            }
+    for (double s : sum) EXPECT_NEAR(s / count, 0.5, 0.01);
+    Point2f a, b;
+    Float la, lb, ua, ub;
+    WavelengthNet({3, 4}, 1).Sample(5, &a, &la, &ua);
+    WavelengthNet({3, 4}, 1).Sample(5, &b, &lb, &ub);
+    EXPECT_TRUE(a.x == b.x && a.y == b.y && la == lb && ua == ub);  // a sample replays
+    WavelengthNet({4, 3}, 1).Sample(5, &b, &lb, &ub);
+    EXPECT_NE(la, lb);
+    WavelengthNet({3, 4}, 2).Sample(5, &b, &lb, &ub);
+    EXPECT_NE(la, lb);
+}

@@ -736,6 +736,7 @@ std::unique_ptr<Scene> Build(const RenderOptions &opts, const std::function<void
     parse(&builder);
     scene->disablePixelJitter |= opts.disablePixelJitter;
     scene->disableWavelengthJitter |= opts.disableWavelengthJitter;
+    scene->wavelengthNet = opts.wavelengthNet;
     Verbose("loaded the scene: " + std::to_string(scene->lights.size()) + " lights");
     return scene;
 }

@@ -44,6 +44,9 @@ struct Scene {
     IntegratorSettings integrator;
     WavelengthSampler wavelengths = WavelengthSampler::Visible();
     bool disablePixelJitter = false, disableWavelengthJitter = false;
+    // --wavelength-net: each sample's film position, wavelength number and first light choice
+    // from one net per pixel (samplers.h, WavelengthNet) instead of the sampler's dimensions.
+    bool wavelengthNet = false;
 
     // Whether nothing opaque lies on the segment of a shadow ray.
     // skipSphere: a sphere's id (Sphere::id) the segment is known not to cross, or 0.

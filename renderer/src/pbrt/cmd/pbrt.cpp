@@ -46,6 +46,11 @@ Rendering:
   --pixel X,Y                  render only this pixel
   --disable-pixel-jitter       sample every pixel at its centre
   --disable-wavelength-jitter  the same four wavelengths for every path (u = 1/2)
+  --wavelength-net             draw each sample's wavelength number together with its film
+                               position and first choice of light, from one scrambled
+                               Sobol' net per pixel, so that each part of a pixel (each side
+                               of an edge) and each lamp gets stratified wavelengths; the
+                               sampler's other dimensions are unchanged (design §5.2)
 Output:
   --outfile FILE               image to write (.exr: linear 32-bit float, the colour space's
                                chromaticities and the render's provenance as attributes;
@@ -294,6 +299,8 @@ int main(int argc, char **argv) {
             opts.disablePixelJitter = true;
         } else if (flag == "--disable-wavelength-jitter") {
             opts.disableWavelengthJitter = true;
+        } else if (flag == "--wavelength-net") {
+            opts.wavelengthNet = true;
         } else if (flag == "--cropwindow") {
             std::vector<std::string> v = SplitList(flag, value(), 4);
             std::array<Float, 4> c;

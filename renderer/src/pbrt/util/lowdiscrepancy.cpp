@@ -120,6 +120,49 @@ uint32_t SobolDim1(uint32_t index) {
            kSobolDim1[2][(index >> 16) & 0xff] ^ kSobolDim1[3][index >> 24];
 }
 
+namespace {
+
+// Direction numbers of a Sobol' dimension as 32-bit fractions v_k = m_k 2^(32-k), from
+// Sobol's recurrence for its primitive polynomial x^s + a_1 x^(s-1) + ... + a_(s-1) x + 1
+// (`a` holds a_1 .. a_(s-1) as bits, a_1 highest) and its initial m_1 .. m_s (each odd, < 2^k):
+// m_k = 2 a_1 m_(k-1) ^ 4 a_2 m_(k-2) ^ ... ^ 2^s m_(k-s) ^ m_(k-s).
+std::array<uint32_t, 32> MakeSobolDirections(int s, uint32_t a, std::initializer_list<uint64_t> initial) {
+    std::array<uint64_t, 33> m{};
+    int k = 1;
+    for (uint64_t mk : initial) m[size_t(k++)] = mk;
+    for (; k <= 32; ++k) {
+        uint64_t v = (m[size_t(k - s)] << s) ^ m[size_t(k - s)];
+        for (int j = 1; j < s; ++j)
+            if ((a >> (s - 1 - j)) & 1) v ^= m[size_t(k - j)] << j;
+        m[size_t(k)] = v;
+    }
+    std::array<uint32_t, 32> v{};
+    for (int j = 1; j <= 32; ++j) v[size_t(j - 1)] = uint32_t(m[size_t(j)] << (32 - j));
+    return v;
+}
+// Dimension 2: x^2 + x + 1, m = 1, 3; dimension 3: x^3 + x + 1, m = 1, 3, 1 (the initial
+// numbers of Joe and Kuo 2008).
+// The product with an index, tabulated per index byte as for dimension 1.
+std::array<std::array<uint32_t, 256>, 4> ByteTables(const std::array<uint32_t, 32> &v) {
+    std::array<std::array<uint32_t, 256>, 4> t{};
+    for (size_t byte = 0; byte < 4; ++byte)
+        for (size_t b = 0; b < 256; ++b)
+            for (size_t k = 0; k < 8; ++k)
+                if (b & (size_t(1) << k)) t[byte][b] ^= v[8 * byte + k];
+    return t;
+}
+const std::array<std::array<uint32_t, 256>, 4> kSobolDim2 = ByteTables(MakeSobolDirections(2, 0b1, {1, 3}));
+const std::array<std::array<uint32_t, 256>, 4> kSobolDim3 = ByteTables(MakeSobolDirections(3, 0b01, {1, 3, 1}));
+
+uint32_t SobolFromTables(const std::array<std::array<uint32_t, 256>, 4> &t, uint32_t index) {
+    return t[0][index & 0xff] ^ t[1][(index >> 8) & 0xff] ^ t[2][(index >> 16) & 0xff] ^ t[3][index >> 24];
+}
+
+}  // namespace
+
+uint32_t SobolDim2(uint32_t index) { return SobolFromTables(kSobolDim2, index); }
+uint32_t SobolDim3(uint32_t index) { return SobolFromTables(kSobolDim3, index); }
+
 uint32_t SobolDim1Wide(uint64_t index) {
     uint32_t r = 0;
     for (int byte = 0; byte < 8 && index; ++byte, index >>= 8) r ^= kSobolDim1Wide[size_t(byte)][index & 0xff];

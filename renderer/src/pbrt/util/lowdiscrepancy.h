@@ -1,10 +1,11 @@
 // Low-discrepancy sequences and their randomizations: the pieces the pixel samplers
 // (samplers.h) are built from.
 //
-//   Sobol'      the first two dimensions of the Sobol' sequence (Sobol' 1967): dimension 0
+//   Sobol'      the first three dimensions of the Sobol' sequence (Sobol' 1967): dimension 0
 //               is the base-2 radical inverse of the index, dimension 1 the product of the
-//               index's bits with the upper-triangular Pascal matrix mod 2. Any 2^k
-//               consecutive points, aligned to 2^k, form a (0, k, 2)-net in base 2.
+//               index's bits with the upper-triangular Pascal matrix mod 2, dimension 2 that
+//               of x^2 + x + 1. Any 2^k consecutive points, aligned to 2^k, form a
+//               (0, k, 2)-net in base 2 in the first two, a (1, k, 3)-net in all three.
 //   Halton      radical inverses in the first kHaltonDimensions prime bases (Halton 1960).
 //   scrambles   of a 32-bit binary fraction: a random digit permutation (XOR with a random
 //               word), Owen's nested uniform scrambling (Owen 1995) computed bit by bit, and
@@ -77,6 +78,13 @@ uint32_t SobolDim1(uint32_t index);
 // low 32 bits, dimension 1 every bit.
 inline uint32_t SobolDim0Wide(uint64_t index) { return ReverseBits32(uint32_t(index)); }
 uint32_t SobolDim1Wide(uint64_t index);
+// Dimension 2 of the Sobol' sequence: primitive polynomial x^2 + x + 1, initial direction
+// numbers m_1 = 1, m_2 = 3. With dimensions 0 and 1 it makes a (1, 3)-sequence in base 2:
+// any 2^k consecutive points aligned to 2^k hold 2 points in every elementary box of volume
+// 2^(1-k).
+uint32_t SobolDim2(uint32_t index);
+// Dimension 3: x^3 + x + 1, m = 1, 3, 1; dimensions 0-3 are a (3, 4)-sequence.
+uint32_t SobolDim3(uint32_t index);
 // Tables of dimension 1's generator columns per index byte, bit-reversed (the Sobol sampler's
 // hot path XORs four of these): ReverseBits32(SobolDim1(i)) = XOR of kSobolDim1Reversed[b][byte b of i].
 extern const std::array<std::array<uint32_t, 256>, 4> kSobolDim1Reversed;

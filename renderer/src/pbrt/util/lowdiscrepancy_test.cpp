@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <set>
 
 using namespace pbrt;
@@ -75,6 +76,54 @@ TEST(LowDiscrepancy, OwenScramblesAreBijectionsThatDependOnTheSeed) {
         for (int b = 0; b < 32; ++b) ones[b] += (s >> b) & 1;
     }
     for (int b = 0; b < 32; ++b) EXPECT_NEAR(ones[b], 2000, 200) << "bit " << b;
+}
+
+TEST(LowDiscrepancy, FirstThreeSobolDimensionsAreA1Net) {
+    // 2^m aligned consecutive points of dimensions 0-2, scrambled or not: every elementary box
+    // of volume 2^(1-m) (2^-a x 2^-b x 2^-c, a + b + c = m - 1) holds exactly 2 of them, and
+    // dimension 2 alone is a (0, m, 1)-net. A wrong direction number breaks this at some m.
+    for (int m = 1; m <= 10; ++m)
+        for (Randomization r : {Randomization::None, Randomization::Owen})
+            for (uint32_t start : {0u, 1u << m, 5u << 16}) {
+                std::vector<std::array<uint32_t, 3>> pts;
+                for (uint32_t i = start; i < start + (1u << m); ++i)
+                    pts.push_back({Scramble(SobolDim0(i), r, 0x51u), Scramble(SobolDim1(i), r, 0x77u),
+                                   Scramble(SobolDim2(i), r, 0x3c3cu)});
+                std::set<uint32_t> strata;
+                for (const auto &p : pts) strata.insert(p[2] >> (32 - m));
+                EXPECT_EQ(strata.size(), pts.size()) << "m " << m;
+                for (int a = 0; a < m; ++a)
+                    for (int b = 0; a + b < m; ++b) {
+                        const int c = m - 1 - a - b;
+                        std::map<std::array<uint32_t, 3>, int> boxes;
+                        for (const auto &p : pts)
+                            ++boxes[{a ? p[0] >> (32 - a) : 0, b ? p[1] >> (32 - b) : 0,
+                                     c ? p[2] >> (32 - c) : 0}];
+                        bool two = boxes.size() == pts.size() / 2;
+                        for (const auto &[box, n] : boxes) two = two && n == 2;
+                        EXPECT_TRUE(two) << "m " << m << " boxes 2^-" << a << " x 2^-" << b << " x 2^-" << c
+                                         << " from " << start << " (" << RandomizationName(r) << ")";
+                    }
+            }
+}
+
+TEST(LowDiscrepancy, SobolDimensionsTwoAndThreeAreA1NetFrom16Points) {
+    // The wavelength and light numbers of --wavelength-net: dimension 3 alone is a
+    // (0, m, 1)-net, and with dimension 2 a (1, m, 2)-net for m >= 4 (t = 2 at m = 3).
+    for (int m = 4; m <= 10; ++m) {
+        std::set<uint32_t> strata;
+        for (uint32_t i = 0; i < (1u << m); ++i) strata.insert(SobolDim3(i) >> (32 - m));
+        EXPECT_EQ(strata.size(), size_t(1) << m) << "m " << m;
+        for (int a = 0; a < m; ++a) {
+            const int b = m - 1 - a;
+            std::map<std::pair<uint32_t, uint32_t>, int> boxes;
+            for (uint32_t i = 0; i < (1u << m); ++i)
+                ++boxes[{a ? SobolDim2(i) >> (32 - a) : 0, b ? SobolDim3(i) >> (32 - b) : 0}];
+            bool two = boxes.size() == (size_t(1) << (m - 1));
+            for (const auto &[box, n] : boxes) two = two && n == 2;
+            EXPECT_TRUE(two) << "m " << m << " boxes 2^-" << a << " x 2^-" << b;
+        }
+    }
 }
 
 TEST(LowDiscrepancy, SobolDim1WideExtendsSobolDim1) {
