@@ -21,7 +21,8 @@ the guiding table of the pixels. Beside ``de2`` the CSV gives ``mean_de``, the m
 pairs over sqrt(2), and its ratios at equal time (it falls as spp^-1/2).
 
     .venv/bin/python scripts/measure_guiding.py [--spp 64] [--pairs 3] [--size 80 60]
-        [--threads 1] [--samplers ...] [--choose-from white scene] [--out docs/guiding/measurement.csv]
+        [--threads 1] [--samplers ...] [--choose-from white scene] [--render-args=--wavelength-net]
+        [--out docs/guiding/measurement.csv]
         [--per-table docs/guiding/per-table.csv] [--pictures docs/guiding]
 """
 from __future__ import annotations
@@ -174,6 +175,8 @@ def main() -> int:
     ap.add_argument("--pbrt", type=Path, default=REPO / "build" / "pbrt")
     ap.add_argument("--out", type=Path)
     ap.add_argument("--guiding-args", default="", help="extra flags for the guided renders")
+    ap.add_argument("--render-args", default="", help="extra flags for every render and the pre-pass runs "
+                    "(e.g. --render-args=--wavelength-net)")
     ap.add_argument("--batch-args", default="", help="extra flags for wavelength-pdf batch (e.g. "
                     "'--range 360 830 --grid-step 5'; default: its own range, 380-780 nm)")
     ap.add_argument("--colours", default="white", help="the surface colours the mixture tables are optimized "
@@ -197,7 +200,7 @@ def main() -> int:
         for name in a.scenes:
             scene = edit_scene(REPO / "scenes" / "benchmark" / name / "scene.pbrt", None, tmp / f"{name}.pbrt",
                                resolution=tuple(a.size))
-            common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp)]
+            common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp), *a.render_args.split()]
             guiding = tuple(a.guiding_args.split())
             tables, optimizer_s, chosen, choose_s, picks = None, float("nan"), None, float("nan"), ""
             if {"guided-optimized", "guided-chosen"} & set(samplers):
