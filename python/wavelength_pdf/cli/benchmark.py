@@ -27,6 +27,7 @@ def cmd_benchmark(args) -> int:
     except ValueError as e:
         print(f"wavelength-pdf benchmark: --rows: {e}", file=sys.stderr)
         return 2
+    spec = G.with_wavelength_net(spec, args.wavelength_net)
     find_pbrt(args.pbrt)  # exit 2 before any work when there is no renderer (design §7)
     if args.list:
         for j in spec.jobs:
@@ -34,7 +35,8 @@ def cmd_benchmark(args) -> int:
         for s in spec.skipped:
             print(f"skipped: {s}", file=sys.stderr)
         return 0
-    command = "wavelength-pdf benchmark" + ("" if args.sweep == "all" else f" --sweep {args.sweep}")
+    command = "wavelength-pdf benchmark" + ("" if args.sweep == "all" else f" --sweep {args.sweep}") + \
+        (" --wavelength-net" if args.wavelength_net else "")
     run_benchmark(spec, args.outdir, workers=args.workers, scheduler=args.scheduler, nthreads=args.nthreads,
                   pbrt=args.pbrt, timing=args.timing, timing_rounds=args.timing_rounds,
                   timing_spp=args.timing_spp, command=command, render=not args.no_render)
@@ -67,6 +69,9 @@ def add_parser(sub, out: Path) -> None:
                    help="render and score only these rows of each job (" + ", ".join(G.ROWS) + "); "
                         "the floor, the reference and pbrt-v4's own visible sampling are always rendered "
                         "(default: every row of the job)")
+    b.add_argument("--wavelength-net", action="store_true",
+                   help="render every image (rows, floor, reference) with pbrt --wavelength-net (design §5.2); "
+                        "give it its own -o, since the renders differ")
     b.add_argument("--list", action="store_true", help="list the jobs and exit")
     b.add_argument("-o", "--outdir", type=Path, default=out / "benchmark", help="output folder (default out/benchmark)")
     b.add_argument("--shared", type=Path, default=G.SHARED,

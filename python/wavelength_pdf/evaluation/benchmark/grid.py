@@ -200,6 +200,8 @@ class Job:
     check_spp: tuple[int, ...] = (64,)
     rows: tuple[str, ...] = TABLE_ROWS
     sweep: str = "scenes"
+    #: Every render with ``--wavelength-net`` (design §5.2), reference and floor included.
+    wavelength_net: bool = False
 
     @property
     def size(self) -> tuple[int, int] | float:
@@ -296,6 +298,11 @@ def with_rows(g: GridSpec, rows: Sequence[str] | None) -> GridSpec:
         raise ValueError(f"unknown rows {', '.join(unknown)}; the rows are {', '.join(ROWS)}")
     return GridSpec([replace(j, rows=tuple(r for r in j.rows if r in rows)) for j in g.jobs],
                     g.shared, g.skipped)
+
+
+def with_wavelength_net(g: GridSpec, on: bool) -> GridSpec:
+    """Every job's renders with ``--wavelength-net`` (``on``), or as they are."""
+    return GridSpec([replace(j, wavelength_net=True) for j in g.jobs], g.shared, g.skipped) if on else g
 
 
 def select(g: GridSpec, only: list[str] | None) -> GridSpec:

@@ -69,17 +69,18 @@ class JobPlan:
         return [*self.truth_chunks, *self.images.values(), *self.floor.values()]
 
 
-def sampler_of(row: str, tables: dict[str, Path], repeats: int = 1) -> rendering.Sampler:
+def sampler_of(row: str, tables: dict[str, Path], repeats: int = 1, net: bool = False) -> rendering.Sampler:
     """The renderer options of a row: a table through ``--wavelength-pdf``, or pbrt-v4's own
-    visible sampling for the check row."""
+    visible sampling for the check row; ``net``: with ``--wavelength-net`` (design §5.2)."""
+    extra: tuple[str, ...] = ("--wavelength-net",) if net else ()
     if row == G.BUILTIN:
-        return rendering.Sampler(row, "pbrt-v4 visible (built in)", ("--wavelength-sampling", "visible"))
+        return rendering.Sampler(row, "pbrt-v4 visible (built in)", ("--wavelength-sampling", "visible", *extra))
     args: tuple[str, ...] = ("--wavelength-pdf", str(tables[row]))
     label = f"{row} table"
     if repeats > 1:
         args += ("--wavelength-repeats", str(repeats))
         label += f" x{repeats} wavelengths"
-    return rendering.Sampler(row, label, args)
+    return rendering.Sampler(row, label, args + extra)
 
 
 def lamp_folder(out: Path, job: G.Job) -> Path:
@@ -171,15 +172,18 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
                 if row == G.BUILTIN and spp not in job.check_spp:
                     continue
                 p.images[(row, spp, seed)] = RenderJob(scene, renders / f"{row}-{spp}-seed{seed}.exr",
-                                                       sampler_of(row, tables), spp, seed, pbrt)
+                                                       sampler_of(row, tables, net=job.wavelength_net), spp,
+                                                       seed, pbrt)
             if spp in job.floor_spp:
                 p.floor[(spp, seed)] = RenderJob(scene, renders / f"floor-{spp}-seed{seed}.exr",
-                                                 sampler_of(G.FLOOR_TABLE, tables, job.floor_repeats), spp, seed,
+                                                 sampler_of(G.FLOOR_TABLE, tables, job.floor_repeats,
+                                                            job.wavelength_net), spp, seed,
                                                  pbrt)
     k = len(TRUTH_ROWS)
     for i, row in enumerate(TRUTH_ROWS):
         p.truth_chunks.append(RenderJob(scene, renders / f"truth-{job.truth_spp}-chunk{i}-{row}.exr",
-                                        sampler_of(row, tables), job.truth_spp // k, 10_000 + 1_000 * i, pbrt))
+                                        sampler_of(row, tables, net=job.wavelength_net), job.truth_spp // k,
+                                        10_000 + 1_000 * i, pbrt))
     return p
 
 

@@ -114,6 +114,21 @@ def test_rows_can_be_narrowed_and_the_colorchecker_has_a_floor_at_each_spp():
             assert j.floor_spp == (j.spp if j.scene.key == "colorchecker" else (16,)), j.name
 
 
+def test_wavelength_net_reaches_every_render_of_a_job(tmp_path):
+    """benchmark --wavelength-net: the rows, the floor and the reference's chunks all render
+    with it; without it none does."""
+    from wavelength_pdf.evaluation.benchmark import run
+
+    g = G.small_grid()
+    assert G.with_wavelength_net(g, False) is g
+    for on in (False, True):
+        job = G.with_wavelength_net(g, on).jobs[0]
+        p = run.plan_job(job, tmp_path / str(on), G.SHARED, None)
+        renders = p.renders()
+        assert len(renders) == len(p.images) + len(p.floor) + len(p.truth_chunks) > 0
+        assert all(("--wavelength-net" in r.sampler.args) == on for r in renders)
+
+
 def test_benchmark_refuses_unknown_rows_before_any_work(tmp_path, capsys):
     from wavelength_pdf.cli import main
 
