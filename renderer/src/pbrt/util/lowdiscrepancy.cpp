@@ -10,28 +10,60 @@ namespace pbrt {
 
 namespace {
 
+// The product of a Sobol' generator matrix (its columns v, 32-bit fractions) with an index is
+// linear over GF(2), so it is tabulated per index byte: entry b of table `byte` is the XOR of
+// the columns of the bits of b, shifted to that byte.
+template <int NBytes>
+std::array<std::array<uint32_t, 256>, NBytes> ByteTables(const std::array<uint32_t, 8 * NBytes> &v) {
+    std::array<std::array<uint32_t, 256>, NBytes> t{};
+    for (size_t byte = 0; byte < size_t(NBytes); ++byte)
+        for (size_t b = 0; b < 256; ++b)
+            for (size_t k = 0; k < 8; ++k)
+                if (b & (size_t(1) << k)) t[byte][b] ^= v[8 * byte + k];
+    return t;
+}
+
+// The XOR of the four byte tables' entries for an index's bytes.
+uint32_t SobolFromTables(const std::array<std::array<uint32_t, 256>, 4> &t, uint32_t index) {
+    return t[0][index & 0xff] ^ t[1][(index >> 8) & 0xff] ^ t[2][(index >> 16) & 0xff] ^ t[3][index >> 24];
+}
+
 // Direction numbers of the second Sobol' dimension (primitive polynomial x + 1): the
 // generator matrix is the upper-triangular Pascal matrix mod 2, v_k = v_{k-1} ^ (v_{k-1} >> 1),
 // truncated to 32 bits of fraction (row j of column k only depends on rows <= j of column
-// k - 1, so the recurrence holds for every column k < 64). The product with an index is
-// linear over GF(2), so it is tabulated per index byte.
+// k - 1, so the recurrence holds for every column k < 64).
 template <int NBytes>
 std::array<std::array<uint32_t, 256>, NBytes> MakeSobolDim1Tables() {
     std::array<uint32_t, 8 * NBytes> v{};
     v[0] = 1u << 31;
     for (int k = 1; k < 8 * NBytes; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
-    std::array<std::array<uint32_t, 256>, NBytes> t{};
-    for (int byte = 0; byte < NBytes; ++byte)
-        for (int b = 0; b < 256; ++b) {
-            uint32_t r = 0;
-            for (int k = 0; k < 8; ++k)
-                if (b & (1 << k)) r ^= v[8 * byte + k];
-            t[byte][b] = r;
-        }
-    return t;
+    return ByteTables<NBytes>(v);
 }
 const std::array<std::array<uint32_t, 256>, 4> kSobolDim1 = MakeSobolDim1Tables<4>();
 const std::array<std::array<uint32_t, 256>, 8> kSobolDim1Wide = MakeSobolDim1Tables<8>();
+
+// Direction numbers of a Sobol' dimension as 32-bit fractions v_k = m_k 2^(32-k), from
+// Sobol's recurrence for its primitive polynomial x^s + a_1 x^(s-1) + ... + a_(s-1) x + 1
+// (`a` holds a_1 .. a_(s-1) as bits, a_1 highest) and its initial m_1 .. m_s (each odd, < 2^k):
+// m_k = 2 a_1 m_(k-1) ^ 4 a_2 m_(k-2) ^ ... ^ 2^s m_(k-s) ^ m_(k-s).
+std::array<uint32_t, 32> MakeSobolDirections(int s, uint32_t a, std::initializer_list<uint64_t> initial) {
+    std::array<uint64_t, 33> m{};
+    int k = 1;
+    for (uint64_t mk : initial) m[size_t(k++)] = mk;
+    for (; k <= 32; ++k) {
+        uint64_t v = (m[size_t(k - s)] << s) ^ m[size_t(k - s)];
+        for (int j = 1; j < s; ++j)
+            if ((a >> (s - 1 - j)) & 1) v ^= m[size_t(k - j)] << j;
+        m[size_t(k)] = v;
+    }
+    std::array<uint32_t, 32> v{};
+    for (int j = 1; j <= 32; ++j) v[size_t(j - 1)] = uint32_t(m[size_t(j)] << (32 - j));
+    return v;
+}
+// Dimension 2: x^2 + x + 1, m = 1, 3; dimension 3: x^3 + x + 1, m = 1, 3, 1 (the initial
+// numbers of Joe and Kuo 2008).
+const std::array<std::array<uint32_t, 256>, 4> kSobolDim2 = ByteTables<4>(MakeSobolDirections(2, 0b1, {1, 3}));
+const std::array<std::array<uint32_t, 256>, 4> kSobolDim3 = ByteTables<4>(MakeSobolDirections(3, 0b01, {1, 3, 1}));
 
 // The same with every entry bit-reversed: bit reversal is linear over GF(2), so
 // ReverseBits32(SobolDim1(i)) is the XOR of these (one reversal less per 2D sample).
@@ -115,50 +147,7 @@ uint32_t PermutationElement(uint32_t i, uint32_t l, uint32_t p) {
 
 uint32_t SobolDim0(uint32_t index) { return ReverseBits32(index); }
 
-uint32_t SobolDim1(uint32_t index) {
-    return kSobolDim1[0][index & 0xff] ^ kSobolDim1[1][(index >> 8) & 0xff] ^
-           kSobolDim1[2][(index >> 16) & 0xff] ^ kSobolDim1[3][index >> 24];
-}
-
-namespace {
-
-// Direction numbers of a Sobol' dimension as 32-bit fractions v_k = m_k 2^(32-k), from
-// Sobol's recurrence for its primitive polynomial x^s + a_1 x^(s-1) + ... + a_(s-1) x + 1
-// (`a` holds a_1 .. a_(s-1) as bits, a_1 highest) and its initial m_1 .. m_s (each odd, < 2^k):
-// m_k = 2 a_1 m_(k-1) ^ 4 a_2 m_(k-2) ^ ... ^ 2^s m_(k-s) ^ m_(k-s).
-std::array<uint32_t, 32> MakeSobolDirections(int s, uint32_t a, std::initializer_list<uint64_t> initial) {
-    std::array<uint64_t, 33> m{};
-    int k = 1;
-    for (uint64_t mk : initial) m[size_t(k++)] = mk;
-    for (; k <= 32; ++k) {
-        uint64_t v = (m[size_t(k - s)] << s) ^ m[size_t(k - s)];
-        for (int j = 1; j < s; ++j)
-            if ((a >> (s - 1 - j)) & 1) v ^= m[size_t(k - j)] << j;
-        m[size_t(k)] = v;
-    }
-    std::array<uint32_t, 32> v{};
-    for (int j = 1; j <= 32; ++j) v[size_t(j - 1)] = uint32_t(m[size_t(j)] << (32 - j));
-    return v;
-}
-// Dimension 2: x^2 + x + 1, m = 1, 3; dimension 3: x^3 + x + 1, m = 1, 3, 1 (the initial
-// numbers of Joe and Kuo 2008).
-// The product with an index, tabulated per index byte as for dimension 1.
-std::array<std::array<uint32_t, 256>, 4> ByteTables(const std::array<uint32_t, 32> &v) {
-    std::array<std::array<uint32_t, 256>, 4> t{};
-    for (size_t byte = 0; byte < 4; ++byte)
-        for (size_t b = 0; b < 256; ++b)
-            for (size_t k = 0; k < 8; ++k)
-                if (b & (size_t(1) << k)) t[byte][b] ^= v[8 * byte + k];
-    return t;
-}
-const std::array<std::array<uint32_t, 256>, 4> kSobolDim2 = ByteTables(MakeSobolDirections(2, 0b1, {1, 3}));
-const std::array<std::array<uint32_t, 256>, 4> kSobolDim3 = ByteTables(MakeSobolDirections(3, 0b01, {1, 3, 1}));
-
-uint32_t SobolFromTables(const std::array<std::array<uint32_t, 256>, 4> &t, uint32_t index) {
-    return t[0][index & 0xff] ^ t[1][(index >> 8) & 0xff] ^ t[2][(index >> 16) & 0xff] ^ t[3][index >> 24];
-}
-
-}  // namespace
+uint32_t SobolDim1(uint32_t index) { return SobolFromTables(kSobolDim1, index); }
 
 uint32_t SobolDim2(uint32_t index) { return SobolFromTables(kSobolDim2, index); }
 uint32_t SobolDim3(uint32_t index) { return SobolFromTables(kSobolDim3, index); }
