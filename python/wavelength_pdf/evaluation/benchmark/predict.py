@@ -440,7 +440,7 @@ def markdown(summ: Sequence[dict]) -> str:
     cands = list(dict.fromkeys(s["candidate"] for s in summ))
     get = {(s["candidate"], s["spp"], s["regime"]): s for s in summ}
     cols = [(spp, reg) for spp in sorted({s["spp"] for s in summ}) for reg in ("all", *REGIMES)
-            if any((c, spp, reg) in get for c in {s["candidate"] for s in summ})]
+            if any((c, spp, reg) in get for c in cands)]
     head = "| prediction | " + " | ".join(f"{reg}, {spp} spp" for spp, reg in cols) + " |\n|---|" + "---|" * len(cols)
     lines = [head]
     for c in cands:
