@@ -5,18 +5,24 @@ the lamp's own stratified table (design §1.7, the strongest simple sampler unde
 For each scene: the lamp's J table (``optimize_spectrum``), the scene's transfer
 (``evaluation.transfer.of_file``, at ``--resolution-scale`` of its size), the polish, each
 table's predicted wavelength error at ``--spp`` and at a quarter and four times it
-(``evaluation.choose.wavelength_error``), then PAIRS seed pairs of each table's render of the
+(``evaluation.choose.wavelength_error``) and at ``--spp`` with every pixel's incoherence 0
+(``predicted_coherent``: one spectrum per pixel, as a render with ``--disable-pixel-jitter``
+gives where the pixels see surfaces larger than a pixel), then PAIRS seed pairs of each table's render of the
 scene lit by the lamp, alternating table by table, and the benchmark's ``de2`` of each pair
 (the mean over the lit pixels of CIEDE2000(A, B)^2 / 2: no reference needed), with the CPU
-seconds each image records.
+seconds each image records. With ``--floor`` also the benchmark's floor, and each table's
+``de2`` above it over J's (``above_floor_vs_J``): the part of the error the prediction speaks
+of, where path noise would otherwise pull every ratio towards 1.
 
     .venv/bin/python scripts/measure_pixels_polish.py --spectrum cie:FL11 --spp 64 --pairs 3 \\
-        --scenes scenes/benchmark/colorchecker/scene.pbrt [--out results.csv]
+        --scenes scenes/benchmark/colorchecker/scene.pbrt [--floor] [--render-args=--wavelength-net] \\
+        [--out results.csv]
 """
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import subprocess
 import sys
 import tempfile
@@ -30,6 +36,7 @@ sys.path.insert(0, str(REPO / "python"))
 
 from wavelength_pdf import predict as P  # noqa: E402
 from wavelength_pdf.evaluation import transfer  # noqa: E402
+from wavelength_pdf.evaluation.benchmark.grid import Job  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.measures import _delta_e, lit_pixels  # noqa: E402
 from wavelength_pdf.evaluation.choose import wavelength_error  # noqa: E402
 from wavelength_pdf.evaluation.metrics import rgb_to_lab  # noqa: E402
@@ -39,6 +46,8 @@ from wavelength_pdf.optimize import optimize_for_pixels, optimize_spectrum  # no
 from wavelength_pdf.spectra import load_spectrum  # noqa: E402
 from wavelength_pdf.stratified import stratified_table  # noqa: E402
 from wavelength_pdf.table import write_table  # noqa: E402
+
+FLOOR_REPEATS = Job.floor_repeats  # the benchmark's
 
 
 def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[dict]:
@@ -53,20 +62,31 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     predicted = {name: {spp: wavelength_error(t, spectrum, basis, tr, spp) for spp in (a.spp // 4, a.spp, 4 * a.spp)}
                  for name, t in tables.items()}
+    # The same with every pixel's incoherence 0: each pixel's samples one path whose u is
+    # stratified over them, what a render without pixel jitter (one spectrum per pixel) shows.
+    coherent_tr = dataclasses.replace(tr, incoherence=np.zeros_like(tr.incoherence))
+    coherent = {name: wavelength_error(t, spectrum, basis, coherent_tr, a.spp) for name, t in tables.items()}
     for name, t in tables.items():
         write_table(work / f"{name}.csv", t)
     lit = edit_scene(scene, spectrum, work / "lit.pbrt")
-    images = {name: [] for name in tables}
-    cpu = {name: [] for name in tables}
+    # The benchmark's floor (design §6): the lamp's table with eight wavelength sets per path,
+    # the error left when wavelength noise is all but gone; each table's de2 above it is the
+    # part the prediction speaks of.
+    runs = {name: (name, []) for name in tables}
+    if a.floor:
+        runs["floor"] = ("lamp", ["--wavelength-repeats", str(FLOOR_REPEATS)])
+    images = {name: [] for name in runs}
+    cpu = {name: [] for name in runs}
     # One render at a time, the tables alternating seed by seed (a drift of the machine's
     # speed falls on every table alike).
     for seed in range(1, 2 * a.pairs + 1):
         print(f"{scene.parent.name}: seed {seed} of {2 * a.pairs}", file=sys.stderr)
-        for name in tables:
+        for name, (table, extra) in runs.items():
             out = work / f"{name}-{seed}.exr"
             r = subprocess.run([str(a.pbrt), "--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp),
-                                "--seed", str(seed), "--wavelength-pdf", str(work / f"{name}.csv"),
-                                "--outfile", str(out), str(lit)], capture_output=True, text=True)
+                                "--seed", str(seed), "--wavelength-pdf", str(work / f"{table}.csv"), *extra,
+                                *a.render_args.split(), "--outfile", str(out), str(lit)],
+                               capture_output=True, text=True)
             if r.returncode != 0:
                 sys.exit(r.stderr)
             images[name].append(read_rgb(out))
@@ -74,15 +94,24 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     mask = lit_pixels(np.mean([im for ims in images.values() for im in ims], axis=0))
     de2 = {name: [float(np.mean(_delta_e(rgb_to_lab(ims[2 * i]), rgb_to_lab(ims[2 * i + 1]))[mask] ** 2) / 2)
                   for i in range(a.pairs)] for name, ims in images.items()}
+    floor = float(np.mean(de2["floor"])) if a.floor else None
     shown = scene.relative_to(REPO) if scene.is_relative_to(REPO) else scene
     rows = []
-    for name in tables:
+    for name in runs:
         e = float(np.mean(de2[name]))
-        rows.append({"scene": str(shown), "spectrum": a.spectrum, "spp": a.spp, "pairs": a.pairs, "table": name,
+        is_table = name in tables
+        above = ""
+        if floor is not None and is_table:
+            above = f"{(e - floor) / (np.mean(de2['J']) - floor):.3f}"
+        rows.append({"scene": str(shown), "spectrum": a.spectrum, "spp": a.spp, "pairs": a.pairs,
+                     "render_args": a.render_args, "table": name,
                      "de2": f"{e:.5g}", "de2_se": f"{np.std(de2[name], ddof=1) / np.sqrt(a.pairs):.2g}",
-                     "de2_vs_J": f"{e / np.mean(de2['J']):.3f}", "cpu_s": f"{np.mean(cpu[name]):.3f}",
-                     **{f"predicted_{spp}spp": f"{v:.4g}" for spp, v in predicted[name].items()},
-                     "predicted_vs_J": f"{predicted[name][a.spp] / predicted['J'][a.spp]:.3f}",
+                     "de2_vs_J": f"{e / np.mean(de2['J']):.3f}", "above_floor_vs_J": above,
+                     "cpu_s": f"{np.mean(cpu[name]):.3f}",
+                     **{f"predicted_{spp}spp": (f"{v:.4g}" if is_table else "") for spp, v in
+                        (predicted[name] if is_table else predicted["J"]).items()},
+                     "predicted_vs_J": f"{predicted[name][a.spp] / predicted['J'][a.spp]:.3f}" if is_table else "",
+                     f"predicted_coherent_{a.spp}spp": f"{coherent[name]:.4g}" if is_table else "",
                      "polish_s": f"{polish_s:.1f}" if name == "pixels" else ""})
     return rows
 
@@ -97,6 +126,11 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=2, help="render threads")
     ap.add_argument("--resolution-scale", type=float, default=0.25, help="the transfer copy's size")
     ap.add_argument("--pbrt", type=Path, default=REPO / "build" / "pbrt", help="the renderer")
+    ap.add_argument("--render-args", default="", help="extra flags for every measured render, not the transfer's "
+                    "(e.g. --render-args=--wavelength-net)")
+    ap.add_argument("--floor", action="store_true", help="also render the benchmark's floor (the lamp's table with "
+                    f"{FLOOR_REPEATS} wavelength sets per path, {FLOOR_REPEATS} times a render's cost) and give each "
+                    "table's de2 above it over J's")
     ap.add_argument("--out", type=Path, help="write the rows as CSV here")
     a = ap.parse_args()
     if a.spp < 4 or a.pairs < 2:
