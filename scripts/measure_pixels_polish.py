@@ -7,10 +7,10 @@ For each scene: the lamp's J table (``optimize_spectrum``), the scene's transfer
 table's predicted wavelength error at ``--spp`` and at a quarter and four times it
 (``evaluation.choose.wavelength_error``) and at ``--spp`` with every pixel's incoherence 0
 (``predicted_coherent``: one spectrum per pixel, as a render with ``--disable-pixel-jitter``
-gives where the pixels see surfaces larger than a pixel), then PAIRS seed pairs of each table's render of the
-scene lit by the lamp, alternating table by table, and the benchmark's ``de2`` of each pair
-(the mean over the lit pixels of CIEDE2000(A, B)^2 / 2: no reference needed), with the CPU
-seconds each image records. With ``--floor`` also the benchmark's floor, and each table's
+gives where the pixels see surfaces larger than a pixel), then PAIRS seed pairs of each
+table's render of the scene lit by the lamp, alternating table by table, and the benchmark's
+``de2`` of each pair (the mean over the lit pixels of CIEDE2000(A, B)^2 / 2: no reference
+needed), with the CPU seconds each image records. With ``--floor`` also the benchmark's floor, and each table's
 ``de2`` above it over J's (``above_floor_vs_J``): the part of the error the prediction speaks
 of, where path noise would otherwise pull every ratio towards 1.
 
