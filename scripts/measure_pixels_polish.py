@@ -53,12 +53,15 @@ FLOOR_REPEATS = Job.floor_repeats  # the benchmark's
 def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[dict]:
     work.mkdir(parents=True, exist_ok=True)
     J = optimize_spectrum(spectrum).table
+    lamp = stratified_table(spectrum, "spd")
     tr = transfer.of_file(scene, work / "transfer", a.resolution_scale, a.pbrt, transfer.SPP)
     start = time.monotonic()
-    polished = optimize_for_pixels(spectrum, J, tr.t, tr.centres, a.spp, incoherence=tr.incoherence,
+    # --coherent: the polish aims at pixels that see one spectrum each (incoherence 0).
+    polished = optimize_for_pixels(spectrum, {"J": J, "lamp": lamp}[a.polish_from], tr.t, tr.centres, a.spp,
+                                   incoherence=np.zeros_like(tr.incoherence) if a.coherent else tr.incoherence,
                                    terminated=tr.terminated)
     polish_s = time.monotonic() - start
-    tables = {"lamp": stratified_table(spectrum, "spd"), "J": J, "pixels": polished.table}
+    tables = {"lamp": lamp, "J": J, "pixels": polished.table}
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     predicted = {name: {spp: wavelength_error(t, spectrum, basis, tr, spp) for spp in (a.spp // 4, a.spp, 4 * a.spp)}
                  for name, t in tables.items()}
@@ -104,7 +107,8 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
         if floor is not None and is_table:
             above = f"{(e - floor) / (np.mean(de2['J']) - floor):.3f}"
         rows.append({"scene": str(shown), "spectrum": a.spectrum, "spp": a.spp, "pairs": a.pairs,
-                     "render_args": a.render_args, "table": name,
+                     "render_args": a.render_args, "polish": f"from {a.polish_from}"
+                     + (", coherent" if a.coherent else ""), "table": name,
                      "de2": f"{e:.5g}", "de2_se": f"{np.std(de2[name], ddof=1) / np.sqrt(a.pairs):.2g}",
                      "de2_vs_J": f"{e / np.mean(de2['J']):.3f}", "above_floor_vs_J": above,
                      "cpu_s": f"{np.mean(cpu[name]):.3f}",
@@ -131,6 +135,10 @@ def main() -> int:
     ap.add_argument("--floor", action="store_true", help="also render the benchmark's floor (the lamp's table with "
                     f"{FLOOR_REPEATS} wavelength sets per path, {FLOOR_REPEATS} times a render's cost) and give each "
                     "table's de2 above it over J's")
+    ap.add_argument("--polish-from", choices=("J", "lamp"), default="J",
+                    help="the table the polish starts from: the lamp's J table or its stratified table")
+    ap.add_argument("--coherent", action="store_true",
+                    help="polish for every pixel's incoherence 0 (one spectrum per pixel, as without pixel jitter)")
     ap.add_argument("--out", type=Path, help="write the rows as CSV here")
     a = ap.parse_args()
     if a.spp < 4 or a.pairs < 2:
