@@ -10,9 +10,9 @@ table's predicted wavelength error at ``--spp`` and at a quarter and four times 
 gives where the pixels see surfaces larger than a pixel), then PAIRS seed pairs of each
 table's render of the scene lit by the lamp, alternating table by table, and the benchmark's
 ``de2`` of each pair (the mean over the lit pixels of CIEDE2000(A, B)^2 / 2: no reference
-needed), with the CPU seconds each image records. With ``--floor`` also the benchmark's floor, and each table's
-``de2`` above it over J's (``above_floor_vs_J``): the part of the error the prediction speaks
-of, where path noise would otherwise pull every ratio towards 1.
+needed), with the CPU seconds each image records. With ``--floor`` also the benchmark's
+floor, and each table's ``de2`` above it over J's (``above_floor_vs_J``): the part of the
+error the prediction speaks of, where path noise would otherwise pull every ratio towards 1.
 
     .venv/bin/python scripts/measure_pixels_polish.py --spectrum cie:FL11 --spp 64 --pairs 3 \\
         --scenes scenes/benchmark/colorchecker/scene.pbrt [--floor] [--render-args=--wavelength-net] \\
@@ -55,19 +55,19 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     J = optimize_spectrum(spectrum).table
     lamp = stratified_table(spectrum, "spd")
     tr = transfer.of_file(scene, work / "transfer", a.resolution_scale, a.pbrt, transfer.SPP)
+    # The scene with every pixel's incoherence 0: each pixel's samples one path whose u is
+    # stratified over them, what a render without pixel jitter (one spectrum per pixel) shows.
+    coherent_tr = dataclasses.replace(tr, incoherence=np.zeros_like(tr.incoherence))
     start = time.monotonic()
-    # --coherent: the polish aims at pixels that see one spectrum each (incoherence 0).
-    polished = optimize_for_pixels(spectrum, {"J": J, "lamp": lamp}[a.polish_from], tr.t, tr.centres, a.spp,
-                                   incoherence=np.zeros_like(tr.incoherence) if a.coherent else tr.incoherence,
-                                   terminated=tr.terminated)
+    aim = coherent_tr if a.coherent else tr
+    polished = optimize_for_pixels(spectrum, {"J": J, "lamp": lamp}[a.polish_from], aim.t, aim.centres, a.spp,
+                                   incoherence=aim.incoherence, terminated=aim.terminated)
     polish_s = time.monotonic() - start
     tables = {"lamp": lamp, "J": J, "pixels": polished.table}
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
-    predicted = {name: {spp: wavelength_error(t, spectrum, basis, tr, spp) for spp in (a.spp // 4, a.spp, 4 * a.spp)}
+    spps = (a.spp // 4, a.spp, 4 * a.spp)
+    predicted = {name: {spp: wavelength_error(t, spectrum, basis, tr, spp) for spp in spps}
                  for name, t in tables.items()}
-    # The same with every pixel's incoherence 0: each pixel's samples one path whose u is
-    # stratified over them, what a render without pixel jitter (one spectrum per pixel) shows.
-    coherent_tr = dataclasses.replace(tr, incoherence=np.zeros_like(tr.incoherence))
     coherent = {name: wavelength_error(t, spectrum, basis, coherent_tr, a.spp) for name, t in tables.items()}
     for name, t in tables.items():
         write_table(work / f"{name}.csv", t)
@@ -99,6 +99,7 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
                   for i in range(a.pairs)] for name, ims in images.items()}
     floor = float(np.mean(de2["floor"])) if a.floor else None
     shown = scene.relative_to(REPO) if scene.is_relative_to(REPO) else scene
+    polish = f"from {a.polish_from}" + (", coherent" if a.coherent else "")
     rows = []
     for name in runs:
         e = float(np.mean(de2[name]))
@@ -107,13 +108,11 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
         if floor is not None and is_table:
             above = f"{(e - floor) / (np.mean(de2['J']) - floor):.3f}"
         rows.append({"scene": str(shown), "spectrum": a.spectrum, "spp": a.spp, "pairs": a.pairs,
-                     "render_args": a.render_args, "polish": f"from {a.polish_from}"
-                     + (", coherent" if a.coherent else ""), "table": name,
+                     "render_args": a.render_args, "polish": polish, "table": name,
                      "de2": f"{e:.5g}", "de2_se": f"{np.std(de2[name], ddof=1) / np.sqrt(a.pairs):.2g}",
                      "de2_vs_J": f"{e / np.mean(de2['J']):.3f}", "above_floor_vs_J": above,
                      "cpu_s": f"{np.mean(cpu[name]):.3f}",
-                     **{f"predicted_{spp}spp": (f"{v:.4g}" if is_table else "") for spp, v in
-                        (predicted[name] if is_table else predicted["J"]).items()},
+                     **{f"predicted_{spp}spp": f"{predicted[name][spp]:.4g}" if is_table else "" for spp in spps},
                      "predicted_vs_J": f"{predicted[name][a.spp] / predicted['J'][a.spp]:.3f}" if is_table else "",
                      f"predicted_coherent_{a.spp}spp": f"{coherent[name]:.4g}" if is_table else "",
                      "polish_s": f"{polish_s:.1f}" if name == "pixels" else ""})
