@@ -17,6 +17,7 @@ so that the same input and seed give the same table on any number of cores.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from typing import TYPE_CHECKING, Callable
@@ -210,11 +211,14 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     (:mod:`wavelength_pdf.evaluation.transfer`, in the image's units), with their
     ``incoherence`` and dispersed share ``terminated`` (:func:`wavelength_pdf.predict.pixel_de2`).
 
-    The search is :func:`wavelength_pdf.solvers.refine`'s polish of the given table (and of
-    the equal-mass initialization where that is already better by this objective), at most
-    ``max_evaluations``; the result is judged by §4.4's rules in this objective's values, so
-    it is never worse than the initialization by it. The result's J figures are sqrt(N V),
-    V the predicted mean de2 (:func:`wavelength_pdf.evaluation.choose.wavelength_error`).
+    The search is :func:`wavelength_pdf.solvers.refine`'s polish of the given table, at most
+    ``max_evaluations``, and it is never worse than the given table by this objective: that
+    table is the result when nothing better passes the health check. The check holds each
+    channel's std to the larger of the equal-mass initialization's and the given table's, so
+    a table that is itself worse than the initialization in a channel (an emission table
+    of a lamp with little blue) can be polished. The record's J_init is the equal-mass
+    initialization's. The result's J figures are sqrt(N V), V the predicted mean de2
+    (:func:`wavelength_pdf.evaluation.choose.wavelength_error`).
     """
     from .predict import hat_basis, lit_basis, pixel_weights
     from .solvers import SolverResult
@@ -231,12 +235,20 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     problem = make_problem(spectrum, grid, basis)
     W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated)
     problem = with_objective(problem, "pixels", spp, W)
-    start = Start.of(problem, init_mod.equal_mass_partition(problem))
     P_from = normalize_density(grid, table.pdfs)
-    found = SolverResult(P=P_from, J=objective_mod.J(problem, P_from), message="from the given table")
+    given = health_mod.health(problem, P_from)
+    if not given.accepted():
+        raise ValueError(f"the table to polish is not usable for {getattr(spectrum, 'name', 'the spectrum')}: "
+                         f"{given.reason()}")
+    initial = Start.of(problem, init_mod.equal_mass_partition(problem))
+    initial = dataclasses.replace(initial, health=dataclasses.replace(
+        initial.health, std=np.maximum(initial.health.std, given.std)))
+    # The search starts from, and falls back to, the given table.
+    start = dataclasses.replace(initial, P=P_from, J=objective_mod.J(problem, P_from))
+    found = SolverResult(P=P_from, J=start.J, health=given, message="from the given table")
     with single_threaded_blas():
         run = refine(start, found, Budget.starting(max_evaluations, None, t0), progress=progress)
-    return _judged(problem, start, run, grid, t0, name=getattr(spectrum, "name", ""),
+    return _judged(problem, initial, run, grid, t0, name=getattr(spectrum, "name", ""),
                    source=f"{getattr(spectrum, 'source', '')}; pixels: {t.shape[0]} of a scene", solver="polish",
                    seed=0, objective=objective_label("pixels", spp))
 

@@ -716,7 +716,10 @@ def _best_accepted(ctx: _Context, finalists: list, P0: np.ndarray, who: str) -> 
     if found is not None:
         return found
     extra = int(REPAIR_SHARE * ctx.max_evals)
-    repairs = REPAIRS if finalists and extra >= 10 and not ctx.timed_out else 0
+    # A repair weighs the variance penalty heavier: without one (``mu`` 0, the ``pixels``
+    # objective) there is nothing to weigh, and a basis colour's zero variance reference
+    # would divide 0 by 0.
+    repairs = REPAIRS if finalists and extra >= 10 and not ctx.timed_out and ctx.mu > 0 else 0
     pt, rounds = finalists[0] if finalists else (None, 0)
     for k in range(1, repairs + 1):
         # Hold every channel where the exact problem is worse than the search problem says
