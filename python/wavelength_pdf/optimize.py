@@ -202,14 +202,15 @@ def _judged(problem, start: Start, run, grid: np.ndarray, t0: float, **record) -
 @float64
 def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres: np.ndarray, spp: int, *,
                         incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
-                        max_evaluations: int = REFINE_EVALUATIONS,
+                        spread: np.ndarray | None = None, max_evaluations: int = REFINE_EVALUATIONS,
                         progress: Callable[[int, float], None] | None = None) -> Result:
     """Polish ``table`` (e.g. the lamp's J table, or its emission table) on its own grid for
     the image a scene shows at ``spp``: the ``pixels`` objective (design §4.6), whose value
     is the predicted mean squared CIEDE2000 of the wavelength noise over the pixels whose
     spectral transfers are ``t`` (P, B) at the hat basis' ``centres``
     (:mod:`wavelength_pdf.evaluation.transfer`, in the image's units), with their
-    ``incoherence`` and dispersed share ``terminated`` (:func:`wavelength_pdf.predict.pixel_de2`).
+    ``incoherence`` and dispersed share ``terminated`` (:func:`wavelength_pdf.predict.pixel_de2`),
+    or their ``spread`` (P, B, B) in place of the incoherence.
 
     The search is :func:`wavelength_pdf.solvers.refine`'s polish of the given table, at most
     ``max_evaluations``, and it is never worse than the given table by this objective: that
@@ -233,7 +234,12 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
         raise ValueError(f"t has {t.shape[1]} coefficients per pixel, the basis {centres.size} centres")
     lit, basis = lit_basis(spectrum, hat_basis(centres, float(grid[0]), float(grid[-1])), float(grid[0]), float(grid[-1]))
     problem = make_problem(spectrum, grid, basis)
-    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated)
+    if spread is not None:
+        spread = np.asarray(spread, dtype=np.float64)
+        if spread.shape != (t.shape[0], centres.size, centres.size):
+            raise ValueError(f"spread must be ({t.shape[0]}, {centres.size}, {centres.size}), not {spread.shape}")
+        spread = spread[:, lit][:, :, lit]
+    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated, spread)
     problem = with_objective(problem, "pixels", spp, W)
     P_from = normalize_density(grid, table.pdfs)
     given = health_mod.health(problem, P_from)

@@ -380,7 +380,8 @@ def _one_wavelength_terms(lam: np.ndarray, w: np.ndarray, q: np.ndarray, spectru
 
 def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "sobol",
               metric: str = "de2000", incoherence: np.ndarray | None = None,
-              terminated: np.ndarray | None = None, one_wavelength: np.ndarray | None = None) -> np.ndarray:
+              terminated: np.ndarray | None = None, one_wavelength: np.ndarray | None = None,
+              spread: np.ndarray | None = None) -> np.ndarray:
     """Per pixel, the linearised squared error of its mean of ``spp`` samples (the
     ``covariance`` candidate) for pixels whose spectrum is T_p = sum_b t[p, b] φ_b: ``pc`` is
     the table's path colours for the basis of :func:`hat_basis` (K = B). A pixel's colour is
@@ -394,6 +395,12 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     the path noise (the benchmark's floor), the middle one the wavelength noise that the
     pixel's stratification of u cannot remove (with independent u, (1 + r) Cov_u(C) / N).
     r is capped at N (the linearisation's limit: below).
+
+    ``spread`` (P, B, B): each pixel's spread S_p (:func:`wavelength_pdf.evaluation.transfer.spread`),
+    the covariance of the spectra its samples see (a patch's edge: two spectra, not one
+    spectrum of varying magnitude). It takes the place of r t_p t_p' in the middle term, which
+    is its case of one spectrum: sum_bc S_bc Cov_u(C_b, C_c) / N, its relative size capped at
+    N as r is.
 
     ``terminated`` (P,): the share of each pixel's light carried by paths that kept one
     wavelength (a dispersive surface), with ``one_wavelength`` the basis' covariance of such a
@@ -429,7 +436,10 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     # relative variance r / N exceeds 1, and Lab's cube root no longer follows the linearised
     # error (which would grow with r without bound while the CIEDE2000 of such pixels does not).
     r = np.minimum(per_pixel("incoherence", incoherence), spp) if incoherence is not None else 0.0
-    if incoherence is not None:
+    if spread is not None:
+        cov = cov + np.einsum("pbc,bicj->pij", _capped_spread(spread, t, spp),
+                              basis_covariance(pc, spp, "independent"), optimize=True)
+    elif incoherence is not None:
         cov = cov + r * quad(basis_covariance(pc, spp, "independent"))
     if terminated is not None:
         if one_wavelength is None or np.shape(one_wavelength) != (B, 3, B, 3):
@@ -437,6 +447,17 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
         share = per_pixel("terminated", terminated, 1.0)
         cov = (1.0 - share) ** 2 * cov + share ** 2 * (1.0 + r) * quad(np.asarray(one_wavelength)) / spp
     return lab_quadratic(t @ pc.target, cov, metric)
+
+
+def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int) -> np.ndarray:
+    """The spread (P, B, B), checked, each pixel's scaled down where its size relative to the
+    pixel's spectrum, tr(S) / |t|^2 (r for one spectrum), exceeds N (:func:`pixel_de2`)."""
+    S = np.asarray(spread, dtype=np.float64)
+    P, B = t.shape
+    if S.shape != (P, B, B) or not np.all(np.isfinite(S)):
+        raise ValueError(f"spread must be ({P}, {B}, {B}) finite values, not {S.shape}")
+    rel = np.trace(S, axis1=1, axis2=2) / np.maximum(np.einsum("pb,pb->p", t, t), 1e-300)
+    return S * np.minimum(1.0, spp / np.maximum(rel, 1e-300))[:, None, None]
 
 
 def path_de2(xyz: np.ndarray, incoherence: np.ndarray, spp: int, metric: str = "de2000") -> np.ndarray:
@@ -503,7 +524,7 @@ def xyz_metrics(xyz: np.ndarray) -> np.ndarray:
 
 
 def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.ndarray | None = None,
-                  terminated: np.ndarray | None = None) -> np.ndarray:
+                  terminated: np.ndarray | None = None, spread: np.ndarray | None = None) -> np.ndarray:
     """The weights (3, B*3, B*3) with which :func:`pixel_de2`'s mean over the pixels is linear in
     the basis' covariances (design §4.6, ``pixels``): W_s, W_i, W_1 with
 
@@ -514,7 +535,8 @@ def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.n
     (:func:`one_wavelength_covariance`), each flattened colour-major (b, channel). Each pixel
     contributes t_p t_p' ⊗ A_p (A_p, :func:`xyz_metrics` at its colour t_p · target) times
     (1 − s)², (1 − s)² r and s² (1 + r) / N, r its incoherence capped at N and s its
-    dispersed share, as in :func:`pixel_de2`. The metric at each pixel's colour depends on
+    dispersed share, as in :func:`pixel_de2`; with ``spread``, W_i's pixel term is
+    (1 − s)² S_p ⊗ A_p instead. The metric at each pixel's colour depends on
     the lamp and the scene, not on the table, so an optimizer can minimise the image's
     predicted error through three fixed matrices, whatever the number of pixels."""
     t = np.atleast_2d(np.asarray(t, dtype=np.float64))
@@ -531,8 +553,12 @@ def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.n
         raise ValueError(f"incoherence and terminated must be {P} finite values (>= 0, and in [0, 1])")
     A = xyz_metrics(t @ target)
     out = []
-    for w in ((1 - s) ** 2, (1 - s) ** 2 * r, s ** 2 * (1 + r) / spp):
-        out.append(np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True).reshape(B * 3, B * 3))
+    for k, w in enumerate(((1 - s) ** 2, (1 - s) ** 2 * r, s ** 2 * (1 + r) / spp)):
+        if k == 1 and spread is not None:
+            W = np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, _capped_spread(spread, t, spp), A, optimize=True)
+        else:
+            W = np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True)
+        out.append(W.reshape(B * 3, B * 3))
     return np.stack(out)
 
 

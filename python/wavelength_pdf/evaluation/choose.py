@@ -68,7 +68,7 @@ def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pi
 
     ``spectrum`` may be a list of J kinds of light with ``kinds`` (J, P, B) their transfers
     (:func:`.transfer.kind_transfers`): each pixel is then lit by every kind along that kind's
-    own paths, sum_j E_j t_pj."""
+    own paths, sum_j E_j t_pj. ``tr``'s spread, where it has one, counts for one kind of light."""
     from wavelength_pdf import predict as P
 
     spectra = list(spectrum) if isinstance(spectrum, (list, tuple)) else [spectrum]
@@ -78,7 +78,9 @@ def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pi
     pc = P.stack_path_colours([P.basis_path_colours(table, sp, basis) for sp in spectra])
     one = P.one_wavelength_covariance(table, spectra, basis)
     return float(np.mean(P.pixel_de2(pc, t[pixels], spp, pixel_sampler, incoherence=tr.incoherence[pixels],
-                                     terminated=tr.terminated[pixels], one_wavelength=one)))
+                                     terminated=tr.terminated[pixels], one_wavelength=one,
+                                     spread=None if tr.spread is None or kinds is not None
+                                     else tr.spread[pixels])))
 
 
 def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,

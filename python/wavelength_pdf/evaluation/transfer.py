@@ -29,6 +29,7 @@ from typing import Collection, Sequence
 
 import numpy as np
 
+from wavelength_pdf.exr import read_spectral
 from wavelength_pdf.spectra import Spectrum
 
 #: The spectral film's buckets over the benchmark's range (20 nm each): surface colours and
@@ -69,6 +70,108 @@ class Transfer:
     #: (P,): each pixel's share of light carried by paths that kept one wavelength (a
     #: dispersive surface), the spectral film's channel ``wavelengths.terminated``.
     terminated: np.ndarray
+    #: (P, B, B) or None: each pixel's spread (:func:`spread`), the covariance of the
+    #: spectra its samples see, in the units of ``t``.
+    spread: np.ndarray | None = None
+
+
+#: The renders that measure each pixel's spread (:func:`spread`) cut each side of a pixel into
+#: this many sub-pixels, at SPREAD_SPP samples each: as many samples per pixel as the
+#: incoherence renders, with as many wavelengths per path.
+SPREAD_FACTOR = 4
+SPREAD_SPP = 4
+
+
+def filter_shares(n: int, factor: int, kind: str = "gaussian", radius: float = 1.5,
+                  sigma: float = 0.5) -> np.ndarray:
+    """(n, n * factor): along one axis of a film of ``n`` pixels, the share of pixel i's
+    samples that fall in each of the ``factor`` times finer sub-pixels. pbrt-v4 draws a
+    pixel's film positions with a density proportional to its filter (filter importance
+    sampling, every weight then 1 for these filters), here the ``kind`` pbrt-v4 names
+    ``gaussian`` (exp(-x^2 / 2 sigma^2) less its value at the radius), ``box`` or
+    ``triangle``, of ``radius`` pixels, taken at each sub-pixel's centre. Written here: it
+    is pbrt-v4's filter definitions, which no library serves."""
+    if kind not in ("gaussian", "box", "triangle"):
+        raise ValueError(f"pixel filter {kind!r} is not modelled (gaussian, box, triangle): its negative "
+                         "lobes give samples negative weights")
+    if not (n >= 1 and factor >= 1 and radius > 0 and sigma > 0):
+        raise ValueError(f"filter_shares needs n, factor >= 1 and radius, sigma > 0, got {n}, {factor}, "
+                         f"{radius}, {sigma}")
+    d = ((np.arange(n * factor) + 0.5)[None, :] / factor - (np.arange(n) + 0.5)[:, None])
+    if kind == "gaussian":
+        f = np.exp(-d ** 2 / (2 * sigma ** 2)) - np.exp(-radius ** 2 / (2 * sigma ** 2))
+    elif kind == "triangle":
+        f = radius - np.abs(d)
+    else:
+        f = np.ones_like(d)
+    f = np.where(np.abs(d) < radius, np.maximum(f, 0.0), 0.0)
+    total = f.sum(axis=1, keepdims=True)
+    if np.any(total <= 0):
+        raise ValueError(f"a {kind} filter of radius {radius:g} covers no sub-pixel's centre at {factor} per pixel")
+    return f / total
+
+
+def pixel_filter(scene_file: Path) -> tuple[str, float, float, float]:
+    """The scene's PixelFilter as (kind, x radius, y radius, sigma), with pbrt-v4's defaults
+    (a gaussian of radius 1.5 and sigma 0.5 when there is none; a box of radius 0.5; a
+    triangle of radius 2)."""
+    from wavelength_pdf.pbrt_syntax import split_params, statements, tokenize
+
+    scene_file = Path(scene_file)
+    sts = [split_params(st, 1) for st in statements(tokenize(scene_file.read_text(), scene_file))
+           if st.directive.text == "PixelFilter"]
+    if not sts:
+        return "gaussian", 1.5, 1.5, 0.5
+    st = sts[-1]
+    kind = st.args[0].text
+    r0 = {"gaussian": 1.5, "box": 0.5, "triangle": 2.0}.get(kind, 1.5)
+    values = {p.name: float(p.values[0].text) for p in st.params if p.values}
+    return kind, values.get("xradius", r0), values.get("yradius", r0), values.get("sigma", 0.5)
+
+
+def spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.ndarray) -> np.ndarray:
+    """(h, w, B, B): each pixel's spread from two independent renders ``a``, ``b``
+    (H, W, B) of its sub-pixels, H = h * k, W = w * k: the covariance over the pixel's samples
+    of the spectrum each sees, sum_q w_q (T_q - T)(T_q - T)' with w_q the pixel's shares of
+    its samples (:func:`filter_shares`, (h, H) and (w, W)). Each sub-pixel's own noise is
+    left out by taking one factor from each render (their noises are independent), so the
+    estimate is unbiased, however noisy; only means over many pixels are meant."""
+    if a.shape != b.shape or a.ndim != 3 or shares_y.shape[1] != a.shape[0] or shares_x.shape[1] != a.shape[1]:
+        raise ValueError(f"spread_of: renders {a.shape} and {b.shape} against shares {shares_y.shape}, "
+                         f"{shares_x.shape}")
+
+    def filt(img):
+        return shares_y @ img @ shares_x.T
+
+    B = a.shape[2]
+    ma = np.stack([filt(a[..., i]) for i in range(B)], axis=-1)
+    mb = np.stack([filt(b[..., i]) for i in range(B)], axis=-1)
+    out = np.empty(ma.shape[:2] + (B, B))
+    for i in range(B):
+        for j in range(i, B):
+            v = 0.5 * (filt(a[..., i] * b[..., j] + a[..., j] * b[..., i]) - ma[..., i] * mb[..., j]
+                       - ma[..., j] * mb[..., i])
+            out[..., i, j] = out[..., j, i] = v
+    return out
+
+
+def spread(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: Path | None = None,
+           nthreads: int | None = None, factor: int = SPREAD_FACTOR, spp: int = SPREAD_SPP) -> np.ndarray:
+    """(h, w, B, B): the spread of every pixel of ``source`` rendered at ``size`` (w, h)
+    under the flat lamp (:func:`spread_of`), in bucket units, from a seed pair of a copy at
+    ``factor`` times the resolution (``folder``; kept while the scene and the renderer are
+    unchanged) with the scene's own pixel filter (:func:`pixel_filter`).
+
+    A pixel whose samples see several surfaces (a patch's edge, a texture finer than a pixel)
+    has them see different spectra, T_q = T + D_q: the part D of each sample's estimate is not
+    stratified by the pixel's u (its samples on each surface are a subset), and adds
+    sum_bc S_bc Cov_u(C_b, C_c) / N, S the spread (:func:`wavelength_pdf.predict.pixel_de2`)."""
+    w, h = size
+    copy = copy_scene(source, folder, (w * factor, h * factor))
+    kind, rx, ry, sigma = pixel_filter(copy)
+    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
+                                 name=f"spread-seed{seed}.exr"))[1] for seed in (1, 2))
+    return spread_of(a, b, filter_shares(h, factor, kind, ry, sigma), filter_shares(w, factor, kind, rx, sigma))
 
 
 def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float,
@@ -196,13 +299,22 @@ def _uniform_table():
 
 
 def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] | float | None = None,
-            pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None) -> Transfer:
+            pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None,
+            with_spread: bool = False) -> Transfer:
     """Copy (:func:`copy_scene`), render (once: kept while the scene and the renderer are
-    unchanged) and load the transfer of a scene, with its incoherence."""
+    unchanged) and load the transfer of a scene, with its incoherence, and with
+    ``with_spread`` each pixel's spread (:func:`spread`, its renders in ``folder/spread``)."""
+    import dataclasses
+
     scene_file = copy_scene(source, folder, resolution)
     pair = tuple(render(scene_file, pbrt, INCOHERENCE_SPP, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
                         name=f"incoherence-seed{seed}.exr") for seed in (1, 2))
-    return load(render(scene_file, pbrt, spp, nthreads), pair)
+    tr = load(render(scene_file, pbrt, spp, nthreads), pair)
+    if not with_spread:
+        return tr
+    h, w = tr.mask.shape
+    S = spread(source, Path(folder) / "spread", (w, h), pbrt, nthreads)[tr.mask] * tr.scale ** 2
+    return dataclasses.replace(tr, spread=S)
 
 
 def kind_transfers(source: str | Path, folder: str | Path, lights: Sequence[Collection[tuple[str, int]]],

@@ -1,8 +1,8 @@
 """The ``pixels`` objective (design §4.6): the image's predicted error as an optimizer objective.
 
 - its value is the tabulated pixel prediction (``choose.wavelength_error``: the mean over the
-  pixels of ``predict.pixel_de2``, with incoherence and dispersion) computed by the objective's
-  own quadrature, for an emission table and an optimized one;
+  pixels of ``predict.pixel_de2``, with incoherence and dispersion, or with each pixel's
+  spread) computed by the objective's own quadrature, for an emission table and an optimized one;
 - its gradient agrees with finite differences;
 - ``xyz_metrics`` is ``lab_quadratic``'s measure as a matrix;
 - ``optimize_for_pixels`` never returns a table predicted worse than the one it started from,
@@ -51,14 +51,27 @@ def _pixels_value(table, spectrum, tr, spp):
     grid = np.asarray(table.grid, dtype=np.float64)
     lit, basis = P.lit_basis(spectrum, P.hat_basis(tr.centres, grid[0], grid[-1]), grid[0], grid[-1])
     problem = make_problem(spectrum, grid, basis)
-    W = P.pixel_weights(problem.c, tr.t[:, lit], spp, tr.incoherence, tr.terminated)
+    spread = None if tr.spread is None else tr.spread[:, lit][:, :, lit]
+    W = P.pixel_weights(problem.c, tr.t[:, lit], spp, tr.incoherence, tr.terminated, spread)
     problem = with_objective(problem, "pixels", spp, W)
     return problem, objective.J(problem, table.pdfs) ** 2 / spp
 
 
-@pytest.mark.parametrize("spp", [16, 64])
-def test_value_is_the_tabulated_pixel_prediction(fl2, scene, spp):
+def _with_spread(tr):
+    """``tr`` with a made-up spread: each pixel's samples see its spectrum and one of a
+    neighbour's, in random shares."""
+    rng = np.random.default_rng(4)
+    D = tr.t - np.roll(tr.t, 1, axis=0)
+    w = rng.uniform(0, 0.5, size=len(D))
+    return transfer.Transfer(tr.centres, tr.t, tr.mask, tr.scale, tr.incoherence, tr.terminated,
+                             (w * (1 - w))[:, None, None] * D[:, :, None] * D[:, None, :])
+
+
+@pytest.mark.parametrize("spp,spread", [(16, False), (64, False), (64, True)])
+def test_value_is_the_tabulated_pixel_prediction(fl2, scene, spp, spread):
     basis = P.hat_basis(CENTRES, LO, HI)
+    if spread:
+        scene = _with_spread(scene)
     for table in (stratified.stratified_table(fl2, "spd", LO, HI), stratified.stratified_table(fl2, "xyz", LO, HI)):
         want = wavelength_error(table, fl2, basis, scene, spp)
         _, got = _pixels_value(table, fl2, scene, spp)

@@ -1,0 +1,123 @@
+"""A pixel's spread (``transfer.spread``): the covariance of the spectra its samples see.
+
+- the filter's shares of a pixel's samples sum to 1, are symmetric about its centre, and a box
+  of radius 0.5 gives each of its own sub-pixels the same share;
+- from two renders of sub-pixels, the spread of a pixel split between two spectra is
+  w (1 - w) D D' (w the share on one side), and the renders' independent noise does not
+  bias it (its mean over many pixels converges to the noiseless value);
+- in the prediction (``predict.pixel_de2``) a spread of one spectrum, r t t', is the
+  incoherence r; an edge between two spectra of the same luminance, which the incoherence
+  cannot see, adds the unstratified noise of their difference; the objective's weights
+  (``predict.pixel_weights``) give the same mean;
+- the scene's pixel filter is read, with pbrt-v4's defaults.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wavelength_pdf import predict as P, stratified
+from wavelength_pdf.evaluation import transfer
+from wavelength_pdf.spectra import load_spectrum
+
+CENTRES = np.arange(390.0, 780.0, 20.0)
+
+
+@pytest.mark.parametrize("kind,radius", [("gaussian", 1.5), ("box", 0.5), ("triangle", 2.0)])
+def test_filter_shares_sum_to_one_and_are_symmetric(kind, radius):
+    w = transfer.filter_shares(6, 4, kind, radius)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0)
+    # Pixel 2 (centre 2.5 px, sub-pixels 8-11) sees its row mirrored about its centre.
+    row = w[2]
+    np.testing.assert_allclose(row[10 - 6:10 + 6], row[10 - 6:10 + 6][::-1], atol=1e-15)
+    if kind == "box":
+        np.testing.assert_allclose(w[2, 8:12], 0.25)
+        assert w[2, :8].sum() == 0 and w[2, 12:].sum() == 0
+
+
+def test_filter_shares_refuse_negative_lobed_filters():
+    with pytest.raises(ValueError, match="mitchell"):
+        transfer.filter_shares(4, 4, "mitchell", 2.0)
+
+
+def _halves(h, w, k, T1, T2, column):
+    """Sub-pixel spectra (h k, w k, B): T1 left of sub-pixel ``column``, T2 from it on."""
+    img = np.empty((h * k, w * k, T1.size))
+    img[:, :column] = T1
+    img[:, column:] = T2
+    return img
+
+
+def test_spread_of_an_edge_is_the_two_spectra_difference():
+    rng = np.random.default_rng(5)
+    B, h, w, k = 5, 3, 4, 4
+    T1, T2 = rng.uniform(0.2, 1.0, B), rng.uniform(0.2, 1.0, B)
+    img = _halves(h, w, k, T1, T2, 6)  # the edge inside pixel 1 (sub-pixels 4-7)
+    sy, sx = transfer.filter_shares(h, k, "box", 0.5), transfer.filter_shares(w, k, "box", 0.5)
+    S = transfer.spread_of(img, img, sy, sx)
+    D = T1 - T2
+    np.testing.assert_allclose(S[1, 1], 0.25 * D[:, None] * D[None, :], atol=1e-12)  # half on each side
+    np.testing.assert_allclose(S[:, 0], 0.0, atol=1e-12)  # one spectrum: no spread
+    np.testing.assert_allclose(S[:, 3], 0.0, atol=1e-12)
+
+
+def test_spread_is_unbiased_by_the_renders_noise():
+    rng = np.random.default_rng(6)
+    B, h, w, k = 4, 40, 40, 4
+    T1, T2 = rng.uniform(0.2, 1.0, B), rng.uniform(0.2, 1.0, B)
+    clean = np.concatenate([_halves(h, 1, k, T1, T2, 2)] * w, axis=1)  # every pixel split in half
+    sy, sx = transfer.filter_shares(h, k, "gaussian", 1.5), transfer.filter_shares(w, k, "gaussian", 1.5)
+    want = transfer.spread_of(clean, clean, sy, sx)
+    noisy = [clean * rng.gamma(4.0, 0.25, clean.shape) for _ in range(2)]  # mean 1, 50 % noise
+    got = transfer.spread_of(*noisy, sy, sx)
+    same = transfer.spread_of(noisy[0], noisy[0], sy, sx)  # a render with itself counts its noise
+    inner = (slice(4, -4), slice(4, -4))
+    err = np.abs(got[inner].mean(axis=(0, 1)) - want[inner].mean(axis=(0, 1))).max()
+    assert err < 0.05 * np.abs(want[inner].mean(axis=(0, 1))).max()
+    assert np.trace(same[inner].mean(axis=(0, 1))) > 1.5 * np.trace(want[inner].mean(axis=(0, 1)))
+
+
+@pytest.fixture(scope="module")
+def fl2_basis():
+    fl2 = load_spectrum("cie:FL2", 380.0, 780.0)
+    table = stratified.stratified_table(fl2, "xyz", 380.0, 780.0)
+    return P.path_colours(table, fl2, P.hat_basis(CENTRES, 380.0, 780.0), points=2 ** 12)
+
+
+def test_a_spread_of_one_spectrum_is_the_incoherence(fl2_basis):
+    t = np.stack([np.ones(CENTRES.size), 0.2 + 0.6 * (CENTRES > 550.0)])
+    r = np.array([0.5, 3.0])
+    S = r[:, None, None] * t[:, :, None] * t[:, None, :]
+    np.testing.assert_allclose(P.pixel_de2(fl2_basis, t, 16, spread=S),
+                               P.pixel_de2(fl2_basis, t, 16, incoherence=r), rtol=1e-9)
+    W = P.pixel_weights(fl2_basis.target, t, 16, spread=S)
+    np.testing.assert_allclose(W, P.pixel_weights(fl2_basis.target, t, 16, incoherence=r), rtol=1e-9, atol=1e-300)
+    with pytest.raises(ValueError, match="spread"):
+        P.pixel_de2(fl2_basis, t, 16, spread=S[:, :3, :3])
+
+
+def test_an_edge_of_equal_luminance_adds_what_the_incoherence_cannot_see(fl2_basis):
+    """Half the samples see a reddish, half a bluish spectrum of the same luminance: the
+    pixel's luminance does not vary (r = 0), its spectra do."""
+    red = 0.2 + 0.7 * (CENTRES > 580.0)
+    blue = 0.2 + 0.7 * (CENTRES < 500.0)
+    blue *= (red @ fl2_basis.target[:, 1]) / (blue @ fl2_basis.target[:, 1])
+    t = 0.5 * (red + blue)[None, :]
+    D = red - blue
+    S = 0.25 * (D[:, None] * D[None, :])[None]
+    coherent = P.pixel_de2(fl2_basis, t, 16)
+    edge = P.pixel_de2(fl2_basis, t, 16, spread=S)
+    M = P.basis_covariance(fl2_basis, 16, "independent")
+    cov = np.einsum("b,bicj,c->ij", D, M, D) / 4 + np.einsum("b,bicj,c->ij", t[0], P.basis_covariance(fl2_basis, 16), t[0])
+    np.testing.assert_allclose(edge, P.lab_quadratic(t @ fl2_basis.target, cov[None]), rtol=1e-9)
+    assert edge[0] > 2 * coherent[0]
+
+
+def test_the_scene_pixel_filter_is_read(tmp_path):
+    scene = tmp_path / "s.pbrt"
+    scene.write_text('PixelFilter "box" "float xradius" [ 0.75 ]\nWorldBegin\n')
+    assert transfer.pixel_filter(scene) == ("box", 0.75, 0.5, 0.5)
+    scene.write_text('PixelFilter "gaussian" "float sigma" 0.4\nWorldBegin\n')
+    assert transfer.pixel_filter(scene) == ("gaussian", 1.5, 1.5, 0.4)
+    scene.write_text("WorldBegin\n")
+    assert transfer.pixel_filter(scene) == ("gaussian", 1.5, 1.5, 0.5)
