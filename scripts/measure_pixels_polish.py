@@ -13,10 +13,13 @@ table's render of the scene lit by the lamp, alternating table by table, and the
 needed), with the CPU seconds each image records. With ``--floor`` also the benchmark's
 floor, and each table's ``de2`` above it over J's (``above_floor_vs_J``): the part of the
 error the prediction speaks of, where path noise would otherwise pull every ratio towards 1.
+With ``--spread`` the transfer carries each pixel's spread (``transfer.spread``: the spectra a
+pixel's samples see, two or more at a patch's edge), which the predictions and the polish
+then use in place of the incoherence; give the transfer the images' size (``--transfer-size``).
 
     .venv/bin/python scripts/measure_pixels_polish.py --spectrum cie:FL11 --spp 64 --pairs 3 \\
         --scenes scenes/benchmark/colorchecker/scene.pbrt [--floor] [--render-args=--wavelength-net] \\
-        [--out results.csv]
+        [--spread --transfer-size 320x240 --transfer-dir out/transfer-keep] [--out results.csv]
 """
 from __future__ import annotations
 
@@ -54,14 +57,16 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     work.mkdir(parents=True, exist_ok=True)
     J = optimize_spectrum(spectrum).table
     lamp = stratified_table(spectrum, "spd")
-    tr = transfer.of_file(scene, work / "transfer", a.resolution_scale, a.pbrt, transfer.SPP)
+    folder = (a.transfer_dir / f"{scene.parent.name}-{scene.stem}") if a.transfer_dir else work / "transfer"
+    tr = transfer.of_file(scene, folder, a.transfer_size or a.resolution_scale, a.pbrt, transfer.SPP,
+                          with_spread=a.spread)
     # The scene with every pixel's incoherence 0: each pixel's samples one path whose u is
     # stratified over them, what a render without pixel jitter (one spectrum per pixel) shows.
-    coherent_tr = dataclasses.replace(tr, incoherence=np.zeros_like(tr.incoherence))
+    coherent_tr = dataclasses.replace(tr, incoherence=np.zeros_like(tr.incoherence), spread=None)
     start = time.monotonic()
     aim = coherent_tr if a.coherent else tr
     polished = optimize_for_pixels(spectrum, {"J": J, "lamp": lamp}[a.polish_from], aim.t, aim.centres, a.spp,
-                                   incoherence=aim.incoherence, terminated=aim.terminated)
+                                   incoherence=aim.incoherence, terminated=aim.terminated, spread=aim.spread)
     polish_s = time.monotonic() - start
     tables = {"lamp": lamp, "J": J, "pixels": polished.table}
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
@@ -99,7 +104,7 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
                   for i in range(a.pairs)] for name, ims in images.items()}
     floor = float(np.mean(de2["floor"])) if a.floor else None
     shown = scene.relative_to(REPO) if scene.is_relative_to(REPO) else scene
-    polish = f"from {a.polish_from}" + (", coherent" if a.coherent else "")
+    polish = f"from {a.polish_from}" + (", coherent" if a.coherent else "") + (", spread" if a.spread else "")
     rows = []
     for name in runs:
         e = float(np.mean(de2[name]))
@@ -119,6 +124,13 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     return rows
 
 
+def _size(text: str) -> tuple[int, int]:
+    w, x, h = text.partition("x")
+    if not (x and w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not WIDTHxHEIGHT in pixels")
+    return int(w), int(h)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--spectrum", default="cie:FL11", help="the lamp (a spectrum spec, as `wavelength-pdf optimize`)")
@@ -127,7 +139,17 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=64, help="the spp the polish aims at and the renders use")
     ap.add_argument("--pairs", type=int, default=3, help="seed pairs per table")
     ap.add_argument("--threads", type=int, default=2, help="render threads")
-    ap.add_argument("--resolution-scale", type=float, default=0.25, help="the transfer copy's size")
+    ap.add_argument("--resolution-scale", type=float, default=0.25,
+                    help="the transfer copy's size, a share of 1280 x 720 (the benchmark's copies)")
+    ap.add_argument("--transfer-size", type=_size, default=None, metavar="WxH",
+                    help="the transfer copy's size in pixels instead (the images', e.g. 320x240 for the "
+                         "ColorChecker, for --spread)")
+    ap.add_argument("--transfer-dir", type=Path, default=None,
+                    help="keep the transfer's renders here, one folder per scene, for the next run (default: "
+                         "a temporary folder)")
+    ap.add_argument("--spread", action="store_true",
+                    help="predict and polish with each pixel's spread (transfer.spread: the spectra its samples "
+                         "see) in place of its incoherence; the transfer should then be at the images' size")
     ap.add_argument("--pbrt", type=Path, default=REPO / "build" / "pbrt", help="the renderer")
     ap.add_argument("--render-args", default="", help="extra flags for every measured render, not the transfer's "
                     "(e.g. --render-args=--wavelength-net)")
