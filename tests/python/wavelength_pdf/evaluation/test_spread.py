@@ -121,3 +121,28 @@ def test_the_scene_pixel_filter_is_read(tmp_path):
     assert transfer.pixel_filter(scene) == ("gaussian", 1.5, 1.5, 0.4)
     scene.write_text("WorldBegin\n")
     assert transfer.pixel_filter(scene) == ("gaussian", 1.5, 1.5, 0.5)
+
+
+def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
+    """Rendered: the ColorChecker at 64 x 48 under the flat lamp. The pixels whose neighbours
+    show another spectrum (a patch's edge) have a far larger spread, relative to their own
+    spectrum, than the pixels inside a patch, where one spectrum is seen and the estimate's
+    noise cancels between the two renders."""
+    from repo_paths import REPO
+
+    scene = REPO / "scenes" / "benchmark" / "colorchecker" / "scene.pbrt"
+    tr = transfer.of_file(scene, tmp_path, (64, 48), pbrt, spp=512, with_spread=True)
+    assert tr.spread.shape == (tr.t.shape[0], tr.t.shape[1], tr.t.shape[1])
+    img = np.zeros(tr.mask.shape + (tr.t.shape[1],))
+    img[tr.mask] = tr.t
+    norm = np.linalg.norm(img, axis=2)
+    step = np.zeros(tr.mask.shape)
+    for axis in (0, 1):
+        for shift in (1, -1):
+            d = np.linalg.norm(img - np.roll(img, shift, axis=axis), axis=2)
+            step = np.maximum(step, d)
+    step = (step / np.maximum(norm, 1e-12))[tr.mask]
+    rel = np.trace(tr.spread, axis1=1, axis2=2) / np.maximum(norm[tr.mask] ** 2, 1e-12)
+    edge, inside = rel[step > 0.5], rel[step < 0.05]
+    assert edge.size > 50 and inside.size > 50
+    assert edge.mean() > 10 * abs(inside.mean())
