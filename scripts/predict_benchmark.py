@@ -49,6 +49,10 @@ def main(argv=None) -> int:
                          "unscaled, the prediction being in the image's units)")
     ap.add_argument("--pbrt", type=Path, default=None,
                     help="with --colours scene or pixels: the renderer (default: as design §7)")
+    ap.add_argument("--spread", action="store_true",
+                    help="with --colours pixels: each pixel's spread (the spectra its samples see, from two "
+                         "renders of a 4x finer copy) in place of its incoherence (wavelength_pdf.evaluation."
+                         "transfer.spread)")
     ap.add_argument("--only", nargs="+", default=None, metavar="PREFIX", help="only jobs whose name starts so")
     ap.add_argument("--pool", type=Path, nargs="+", default=None, metavar="CSV",
                     help="render and predict nothing: print the Spearman table over the pairs of these "
@@ -63,6 +67,8 @@ def main(argv=None) -> int:
     if a.results is None and not results.is_file():
         results = HERE.parent / "docs" / "benchmark" / "results.csv"
     problems = []
+    if a.spread and a.colours != "pixels":
+        problems.append("--spread needs --colours pixels (it is a property of each pixel)")
     if not results.is_file():
         problems.append(f"no results file {results}")
     if not (a.outdir / "tables").is_dir():
@@ -94,7 +100,8 @@ def main(argv=None) -> int:
             say(f"predict_benchmark: --colours pixels leaves out {len(own)} jobs lit by their own lamps "
                 f"(several kinds: not one lamp times the scene's transfer): {', '.join(own)}")
             jobs = [j for j in jobs if j.lamp != "own"]
-    recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say, out=a.outdir, pbrt=a.pbrt)
+    recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say, out=a.outdir, pbrt=a.pbrt,
+                           spread=a.spread)
     BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates],
                  fit=a.colours != "pixels")
     cands = [*a.candidates, *(f for f in BP.FLOORED if f.split("+")[0] in a.candidates)]

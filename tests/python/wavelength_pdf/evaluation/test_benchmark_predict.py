@@ -170,7 +170,8 @@ def test_pixel_colours_come_from_one_render_of_the_scene(tmp_path, pbrt):
     every lit pixel's spectrum. Its buckets and its RGB, two independent paths through the
     renderer's film, give the same luminance (the scale that puts the buckets in the image's
     units is 1 within 2 %); the copy of the spd table predicts exactly the spd table's error,
-    uniform sampling more; only the linearised candidates are offered."""
+    uniform sampling more, with each pixel's incoherence or its spread; only the linearised
+    candidates are offered."""
     from wavelength_pdf.evaluation import transfer
 
     out, results = _bench(tmp_path)
@@ -185,6 +186,14 @@ def test_pixel_colours_come_from_one_render_of_the_scene(tmp_path, pbrt):
         assert prs["spd"][c] == 1.0 and prs["uniform"][c] > 1.0, c
     with pytest.raises(ValueError, match="only covariance"):
         BP.predict_jobs(results, jobs, (16,), ("J",), "pixels", out=out, pbrt=pbrt)
+    # With each pixel's spread in place of its incoherence: the same properties, other values.
+    spread = BP.predict_jobs(results, jobs, (16,), BP.PIXEL_CANDIDATES, "pixels", out=out, pbrt=pbrt, spread=True)
+    prs_spread = {p["row"]: p for p in BP.pairs(spread, BP.PIXEL_CANDIDATES)}
+    for c in BP.PIXEL_CANDIDATES:
+        assert prs_spread["spd"][c] == 1.0 and prs_spread["uniform"][c] > 1.0, c
+    assert prs_spread["uniform"]["covariance"] != pytest.approx(prs["uniform"]["covariance"], rel=1e-3)
+    with pytest.raises(ValueError, match="spread"):
+        BP.predict_jobs(results, jobs, (16,), ("covariance",), "white", spread=True)
 
 
 def test_a_scene_lit_by_lamps_of_several_kinds_has_no_transfer(tmp_path):
