@@ -140,8 +140,13 @@ def spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.n
         raise ValueError(f"spread_of: renders {a.shape} and {b.shape} against shares {shares_y.shape}, "
                          f"{shares_x.shape}")
 
+    from scipy.sparse import csr_array
+
+    # A share reaches a few pixels' radius: as sparse matrices, a product costs the image's size.
+    sy, sx = csr_array(shares_y), csr_array(shares_x)
+
     def filt(img):
-        return shares_y @ img @ shares_x.T
+        return np.asarray((sx @ (sy @ img).T).T)
 
     B = a.shape[2]
     ma = np.stack([filt(a[..., i]) for i in range(B)], axis=-1)
