@@ -436,17 +436,31 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     # relative variance r / N exceeds 1, and Lab's cube root no longer follows the linearised
     # error (which would grow with r without bound while the CIEDE2000 of such pixels does not).
     r = np.minimum(per_pixel("incoherence", incoherence), spp) if incoherence is not None else 0.0
+    spread_cov = 0.0
     if spread is not None:
-        cov = cov + np.einsum("pbc,bicj->pij", _capped_spread(spread, t, spp),
-                              basis_covariance(pc, spp, "independent"), optimize=True)
+        spread_cov = np.einsum("pbc,bicj->pij", _capped_spread(spread, t, spp),
+                               basis_covariance(pc, spp, "independent"), optimize=True)
     elif incoherence is not None:
         cov = cov + r * quad(basis_covariance(pc, spp, "independent"))
+    share = 0.0
     if terminated is not None:
         if one_wavelength is None or np.shape(one_wavelength) != (B, 3, B, 3):
             raise ValueError(f"terminated needs one_wavelength, the basis' ({B}, 3, {B}, 3) covariance")
         share = per_pixel("terminated", terminated, 1.0)
         cov = (1.0 - share) ** 2 * cov + share ** 2 * (1.0 + r) * quad(np.asarray(one_wavelength)) / spp
-    return lab_quadratic(t @ pc.target, cov, metric)
+    xyz = t @ pc.target
+    de2 = lab_quadratic(xyz, cov, metric)
+    if spread is not None:
+        # A measured spread is noisy, its covariance indefinite in some pixels: measured
+        # linearly (the objective's form, tr(A C)), its noise cancels in the mean over pixels,
+        # where lab_quadratic's clipping of negative variances would bias it upwards.
+        if metric == "lab":
+            jac = _lab_jacobians(xyz)
+            A = np.swapaxes(jac, 1, 2) @ jac
+        else:
+            A = xyz_metrics(xyz)
+        de2 = de2 + np.einsum("pij,pij->p", A, (1.0 - share) ** 2 * spread_cov)
+    return de2
 
 
 def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int) -> np.ndarray:

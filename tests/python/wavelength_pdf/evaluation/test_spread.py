@@ -146,3 +146,18 @@ def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
     edge, inside = rel[step > 0.5], rel[step < 0.05]
     assert edge.size > 50 and inside.size > 50
     assert edge.mean() > 10 * abs(inside.mean())
+
+
+def test_a_noisy_spread_is_measured_linearly(fl2_basis):
+    """A measured spread is noisy and can be indefinite: the prediction is linear in it, so
+    noise of mean 0 leaves the mean prediction unbiased (clipping negative variances would not)."""
+    rng = np.random.default_rng(7)
+    t = np.full((1, CENTRES.size), 0.5)
+    D = rng.normal(size=CENTRES.size) * 0.2
+    S0 = 0.25 * np.outer(D, D)[None]
+    E = rng.normal(size=(CENTRES.size, CENTRES.size)) * 0.05
+    E = (E + E.T)[None]  # indefinite
+    for metric in ("de2000", "lab"):
+        up, down, mid = (P.pixel_de2(fl2_basis, t, 16, metric=metric, spread=S) for S in (S0 + E, S0 - E, S0))
+        assert up + down == pytest.approx(2 * mid, rel=1e-9)
+        assert up != pytest.approx(mid, rel=1e-3)
