@@ -13,7 +13,9 @@ table's render of the scene lit by the lamp, alternating table by table, and the
 needed), with the CPU seconds each image records. With ``--floor`` also the benchmark's
 floor, and each table's ``de2`` above it over J's (``above_floor_vs_J``): the part of the
 error the prediction speaks of, where path noise would otherwise pull every ratio towards 1.
-With ``--spread`` the transfer carries each pixel's spread (``transfer.spread``: the spectra a
+``--simple`` adds the benchmark's other simple samplers, and with ``--floor`` each table's
+error above the floor over the best simple sampler's (``above_floor_vs_best_simple``). With
+``--spread`` the transfer carries each pixel's spread (``transfer.spread``: the spectra a
 pixel's samples see, two or more at a patch's edge), which the predictions and the polish
 then use in place of the incoherence; give the transfer the images' size (``--transfer-size``).
 
@@ -41,7 +43,7 @@ from wavelength_pdf import predict as P  # noqa: E402
 from wavelength_pdf.evaluation import transfer  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.grid import Job  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.measures import _delta_e, lit_pixels  # noqa: E402
-from wavelength_pdf.evaluation.choose import wavelength_error  # noqa: E402
+from wavelength_pdf.evaluation.choose import simple_tables, wavelength_error  # noqa: E402
 from wavelength_pdf.evaluation.metrics import rgb_to_lab  # noqa: E402
 from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402
 from wavelength_pdf.exr import read_header, read_rgb  # noqa: E402
@@ -69,6 +71,8 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
                                    incoherence=aim.incoherence, terminated=aim.terminated, spread=aim.spread)
     polish_s = time.monotonic() - start
     tables = {"lamp": lamp, "J": J, "pixels": polished.table}
+    if a.simple:  # the benchmark's other simple samplers (the lamp's table is its spd)
+        tables.update({k: v for k, v in simple_tables(spectrum).items() if k != "spd"})
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     spps = (a.spp // 4, a.spp, 4 * a.spp)
     predicted = {name: {spp: wavelength_error(t, spectrum, basis, tr, spp) for spp in spps}
@@ -105,6 +109,8 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     floor = float(np.mean(de2["floor"])) if a.floor else None
     shown = scene.relative_to(REPO) if scene.is_relative_to(REPO) else scene
     polish = f"from {a.polish_from}" + (", coherent" if a.coherent else "") + (", spread" if a.spread else "")
+    simple = [n for n in tables if n not in ("J", "pixels")]
+    best_simple = min(float(np.mean(de2[n])) for n in simple) - floor if floor is not None and a.simple else None
     rows = []
     for name in runs:
         e = float(np.mean(de2[name]))
@@ -116,6 +122,8 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
                      "render_args": a.render_args, "polish": polish, "table": name,
                      "de2": f"{e:.5g}", "de2_se": f"{np.std(de2[name], ddof=1) / np.sqrt(a.pairs):.2g}",
                      "de2_vs_J": f"{e / np.mean(de2['J']):.3f}", "above_floor_vs_J": above,
+                     "above_floor_vs_best_simple": f"{(e - floor) / best_simple:.3f}"
+                     if best_simple is not None and is_table else "",
                      "cpu_s": f"{np.mean(cpu[name]):.3f}",
                      **{f"predicted_{spp}spp": f"{predicted[name][spp]:.4g}" if is_table else "" for spp in spps},
                      "predicted_vs_J": f"{predicted[name][a.spp] / predicted['J'][a.spp]:.3f}" if is_table else "",
@@ -160,6 +168,10 @@ def main() -> int:
                     help="the table the polish starts from: the lamp's J table or its stratified table")
     ap.add_argument("--coherent", action="store_true",
                     help="polish for every pixel's incoherence 0 (one spectrum per pixel, as without pixel jitter)")
+    ap.add_argument("--simple", action="store_true",
+                    help="also render the benchmark's other simple samplers (uniform, visible, luminance, xyz; the "
+                         "lamp's table is its spd) and, with --floor, give each table's de2 above the floor over "
+                         "the best simple sampler's")
     ap.add_argument("--out", type=Path, help="write the rows as CSV here")
     a = ap.parse_args()
     if a.spp < 4 or a.pairs < 2:
