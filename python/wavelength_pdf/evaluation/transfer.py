@@ -114,7 +114,8 @@ def filter_shares(n: int, factor: int, kind: str = "gaussian", radius: float = 1
 def pixel_filter(scene_file: Path) -> tuple[str, float, float, float]:
     """The scene's PixelFilter as (kind, x radius, y radius, sigma), with pbrt-v4's defaults
     (a gaussian of radius 1.5 and sigma 0.5 when there is none; a box of radius 0.5; a
-    triangle of radius 2)."""
+    triangle of radius 2); ValueError naming the file and line for a filter
+    :func:`filter_shares` does not model or a parameter that is not a number."""
     from wavelength_pdf.pbrt_syntax import split_params, statements, tokenize
 
     scene_file = Path(scene_file)
@@ -125,7 +126,15 @@ def pixel_filter(scene_file: Path) -> tuple[str, float, float, float]:
     st = sts[-1]
     kind = st.args[0].text
     r0 = {"gaussian": 1.5, "box": 0.5, "triangle": 2.0}.get(kind, 1.5)
-    values = {p.name: float(p.values[0].text) for p in st.params if p.values}
+    values = {}
+    for p in st.params:
+        try:
+            values[p.name] = float(p.values[0].text)
+        except (IndexError, ValueError):
+            raise ValueError(f"{p.where}: PixelFilter parameter \"{p.name}\" is not a number") from None
+    if kind not in ("gaussian", "box", "triangle"):
+        raise ValueError(f"{st.directive.where}: pixel filter {kind!r} is not modelled (gaussian, box, triangle): "
+                         "its negative lobes give samples negative weights")
     return kind, values.get("xradius", r0), values.get("yradius", r0), values.get("sigma", 0.5)
 
 
@@ -312,6 +321,8 @@ def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] 
     import dataclasses
 
     scene_file = copy_scene(source, folder, resolution)
+    if with_spread:
+        pixel_filter(scene_file)  # a filter the spread does not model is refused before any render
     pair = tuple(render(scene_file, pbrt, INCOHERENCE_SPP, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
                         name=f"incoherence-seed{seed}.exr") for seed in (1, 2))
     tr = load(render(scene_file, pbrt, spp, nthreads), pair)

@@ -121,6 +121,12 @@ def test_the_scene_pixel_filter_is_read(tmp_path):
     assert transfer.pixel_filter(scene) == ("gaussian", 1.5, 1.5, 0.4)
     scene.write_text("WorldBegin\n")
     assert transfer.pixel_filter(scene) == ("gaussian", 1.5, 1.5, 0.5)
+    scene.write_text('\nPixelFilter "mitchell"\nWorldBegin\n')
+    with pytest.raises(ValueError, match=r"s\.pbrt:2.*mitchell.*not modelled"):
+        transfer.pixel_filter(scene)
+    scene.write_text('PixelFilter "box" "float xradius" [ "wide" ]\nWorldBegin\n')
+    with pytest.raises(ValueError, match=r"s\.pbrt:1.*xradius.*not a number"):
+        transfer.pixel_filter(scene)
 
 
 def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
