@@ -40,6 +40,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "python"))
 
 from wavelength_pdf import predict as P  # noqa: E402
+from wavelength_pdf.cli.evaluate import _resolution  # noqa: E402  (evaluate's --resolution WxH)
 from wavelength_pdf.evaluation import transfer  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.grid import Job  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.measures import _delta_e, lit_pixels  # noqa: E402
@@ -132,13 +133,6 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     return rows
 
 
-def _size(text: str) -> tuple[int, int]:
-    w, x, h = text.partition("x")
-    if not (x and w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
-        raise argparse.ArgumentTypeError(f"{text!r} is not WIDTHxHEIGHT in pixels")
-    return int(w), int(h)
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--spectrum", default="cie:FL11", help="the lamp (a spectrum spec, as `wavelength-pdf optimize`)")
@@ -149,7 +143,7 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=2, help="render threads")
     ap.add_argument("--resolution-scale", type=float, default=0.25,
                     help="the transfer copy's size, a share of 1280 x 720 (the benchmark's copies)")
-    ap.add_argument("--transfer-size", type=_size, default=None, metavar="WxH",
+    ap.add_argument("--transfer-size", type=_resolution, default=None, metavar="WxH",
                     help="the transfer copy's size in pixels instead (the images', e.g. 320x240 for the "
                          "ColorChecker, for --spread)")
     ap.add_argument("--transfer-dir", type=Path, default=None,

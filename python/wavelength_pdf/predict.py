@@ -566,14 +566,15 @@ def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.n
                                                   and np.all((s >= 0) & (s <= 1))):
         raise ValueError(f"incoherence and terminated must be {P} finite values (>= 0, and in [0, 1])")
     A = xyz_metrics(t @ target)
-    out = []
-    for k, w in enumerate(((1 - s) ** 2, (1 - s) ** 2 * r, s ** 2 * (1 + r) / spp)):
-        if k == 1 and spread is not None:
-            W = np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, _capped_spread(spread, t, spp), A, optimize=True)
-        else:
-            W = np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True)
-        out.append(W.reshape(B * 3, B * 3))
-    return np.stack(out)
+
+    def outer(w):
+        return np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True)
+
+    # The unstratified term: each pixel's spread, or its one spectrum's r t t'.
+    middle = (np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, _capped_spread(spread, t, spp), A, optimize=True)
+              if spread is not None else outer((1 - s) ** 2 * r))
+    W = [outer((1 - s) ** 2), middle, outer(s ** 2 * (1 + r) / spp)]
+    return np.stack([w.reshape(B * 3, B * 3) for w in W])
 
 
 def j_squared(pc: PathColours, spp: int, pixel_sampler: str = "sobol") -> float:

@@ -23,7 +23,7 @@ pixel spectra are sums of differently shaped lamps) and are refused.
 from __future__ import annotations
 
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Collection, Sequence
 
@@ -80,6 +80,13 @@ class Transfer:
 #: incoherence renders, with as many wavelengths per path.
 SPREAD_FACTOR = 4
 SPREAD_SPP = 4
+#: The pixel filters the spread models, with pbrt-v4's default radius of each (pixels).
+FILTER_RADII = {"gaussian": 1.5, "box": 0.5, "triangle": 2.0}
+
+
+def _unmodelled(kind: str) -> str:
+    return (f"pixel filter {kind!r} is not modelled ({', '.join(FILTER_RADII)}): its negative lobes give "
+            "samples negative weights")
 
 
 def filter_shares(n: int, factor: int, kind: str = "gaussian", radius: float = 1.5,
@@ -91,9 +98,8 @@ def filter_shares(n: int, factor: int, kind: str = "gaussian", radius: float = 1
     ``gaussian`` (exp(-x^2 / 2 sigma^2) less its value at the radius), ``box`` or
     ``triangle``, of ``radius`` pixels, taken at each sub-pixel's centre. Written here: it
     is pbrt-v4's filter definitions, which no library serves."""
-    if kind not in ("gaussian", "box", "triangle"):
-        raise ValueError(f"pixel filter {kind!r} is not modelled (gaussian, box, triangle): its negative "
-                         "lobes give samples negative weights")
+    if kind not in FILTER_RADII:
+        raise ValueError(_unmodelled(kind))
     if not (n >= 1 and factor >= 1 and radius > 0 and sigma > 0):
         raise ValueError(f"filter_shares needs n, factor >= 1 and radius, sigma > 0, got {n}, {factor}, "
                          f"{radius}, {sigma}")
@@ -125,16 +131,15 @@ def pixel_filter(scene_file: Path) -> tuple[str, float, float, float]:
         return "gaussian", 1.5, 1.5, 0.5
     st = sts[-1]
     kind = st.args[0].text
-    r0 = {"gaussian": 1.5, "box": 0.5, "triangle": 2.0}.get(kind, 1.5)
     values = {}
     for p in st.params:
         try:
             values[p.name] = float(p.values[0].text)
         except (IndexError, ValueError):
             raise ValueError(f"{p.where}: PixelFilter parameter \"{p.name}\" is not a number") from None
-    if kind not in ("gaussian", "box", "triangle"):
-        raise ValueError(f"{st.directive.where}: pixel filter {kind!r} is not modelled (gaussian, box, triangle): "
-                         "its negative lobes give samples negative weights")
+    if kind not in FILTER_RADII:
+        raise ValueError(f"{st.directive.where}: {_unmodelled(kind)}")
+    r0 = FILTER_RADII[kind]
     return kind, values.get("xradius", r0), values.get("yradius", r0), values.get("sigma", 0.5)
 
 
@@ -318,8 +323,6 @@ def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] 
     """Copy (:func:`copy_scene`), render (once: kept while the scene and the renderer are
     unchanged) and load the transfer of a scene, with its incoherence, and with
     ``with_spread`` each pixel's spread (:func:`spread`, its renders in ``folder/spread``)."""
-    import dataclasses
-
     scene_file = copy_scene(source, folder, resolution)
     if with_spread:
         pixel_filter(scene_file)  # a filter the spread does not model is refused before any render
@@ -330,7 +333,7 @@ def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] 
         return tr
     h, w = tr.mask.shape
     S = spread(source, Path(folder) / "spread", (w, h), pbrt, nthreads)[tr.mask] * tr.scale ** 2
-    return dataclasses.replace(tr, spread=S)
+    return replace(tr, spread=S)
 
 
 def kind_transfers(source: str | Path, folder: str | Path, lights: Sequence[Collection[tuple[str, int]]],
