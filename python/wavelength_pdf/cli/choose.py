@@ -17,10 +17,17 @@ def cmd_choose(args: argparse.Namespace) -> int:
 
     if not args.scene.is_file():
         raise BadInput(f"{args.scene}: no such scene file")
-    if not args.tables and args.no_simple:
-        raise BadInput("nothing to compare: give tables or drop --no-simple")
+    if not args.tables and args.no_simple and not args.polish:
+        raise BadInput("nothing to compare: give tables, drop --no-simple or add --polish")
+    if args.resolution_scale is None:
+        args.resolution_scale = 1.0 if args.spread else 0.1
     if not 0 < args.resolution_scale <= 1:
         raise BadInput(f"--resolution-scale must lie in (0, 1], not {args.resolution_scale:g}")
+    if args.spread and args.resolution_scale != 1:
+        raise BadInput("--spread measures the pixels you render: it needs the scene's own film size "
+                       f"(--resolution-scale 1), not {args.resolution_scale:g} of it")
+    if args.polish and args.pixel_sampler != "sobol":
+        raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
     tables = {}
     for path in args.tables:
         tables[str(path)] = read_table(path)  # every table read (and refused) before any render
@@ -28,7 +35,7 @@ def cmd_choose(args: argparse.Namespace) -> int:
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     preds = predict_tables(args.scene, tables, args.spp, workdir, pixel_sampler=args.pixel_sampler,
                            resolution=args.resolution_scale, pbrt=args.pbrt, transfer_spp=args.transfer_spp,
-                           simple=not args.no_simple, say=say)
+                           simple=not args.no_simple, polish=args.polish, spread=args.spread, say=say)
     width = max(len(p.name) for p in preds)
     print(f"{args.scene} at {args.spp} spp ({args.pixel_sampler}): predicted mean squared CIEDE2000 over "
           f"the lit pixels")
@@ -93,7 +100,8 @@ def _prediction_options(c, resolution: float) -> None:
                    help="your pixel sampler: low-discrepancy (pbrt-v4's sobol and zsobol samplers; default) "
                         "or independent")
     c.add_argument("--resolution-scale", type=float, default=resolution, metavar="F",
-                   help=f"the renders' film size as a share of the scene's (default {resolution:g})")
+                   help="the renders' film size as a share of the scene's (default "
+                        + (f"{resolution:g})" if resolution else "0.1, with --spread 1)"))
     c.add_argument("--transfer-spp", type=positive_int, default=1024, metavar="N",
                    help="samples per pixel of the spectral render (default 1024)")
     c.add_argument("--workdir", type=Path, default=None, metavar="DIR",
@@ -113,12 +121,21 @@ def add_parser(sub) -> None:
                     "of its size; design §6.8), and prints them best first; -o writes the best. The scene "
                     "must be lit by one kind of light (emitters whose spectra are equal up to scale). Over "
                     "the benchmark's scene sweep its choice was never worse than the best simple sampler by "
-                    "more than 10 % (docs/benchmark.md).")
+                    "more than 10 % (docs/benchmark.md). --polish adds tables polished for the scene's pixels "
+                    "(from the lamp's own spd table, and from each table given), --spread the spectra each "
+                    "pixel's samples see at the edges of what it shows.")
     c.add_argument("scene", type=Path, metavar="SCENE.pbrt", help="a pbrt-v4 scene lit by one kind of light")
     c.add_argument("tables", type=Path, nargs="*", metavar="TABLE.csv", help="tables to compare (design §2)")
     c.add_argument("--no-simple", action="store_true", help="compare the given tables only")
     c.add_argument("-o", "--output", type=Path, default=None, metavar="BEST.csv", help="write the best table here")
-    _prediction_options(c, 0.1)
+    c.add_argument("--polish", action="store_true",
+                   help="also the spd table and each given table polished for the scene's pixels at --spp "
+                        "(the pixels objective, design §4.6; seconds each, no optimizer run needed)")
+    c.add_argument("--spread", action="store_true",
+                   help="predict with each pixel's spread (the spectra its samples see, two or more at an edge; "
+                        "design §6.8) from a further seed pair at 4 x 4 sub-pixels: measured at the scene's own "
+                        "film size, so the renders cost more than at the default tenth")
+    _prediction_options(c, None)
     c.set_defaults(func=cmd_choose, extra="evaluation")
 
     g = sub.add_parser(

@@ -2,7 +2,9 @@
 the scene (design §6.8), without rendering with any of them.
 
 The candidates are the given tables and the simple samplers of design §1.7 for the scene's
-lamp (``uniform``, ``visible``, ``spd``, ``luminance``, ``xyz``). For each, the prediction is
+lamp (``uniform``, ``visible``, ``spd``, ``luminance``, ``xyz``), and with ``polish`` the
+``spd`` table and each given one polished for the scene's pixels (:func:`for_image`, design
+§4.6). For each, the prediction is
 the mean over the scene's lit pixels of the linearised squared CIEDE2000 of the pixel's mean
 of N samples, with each pixel's own light, incoherence and dispersion
 (:func:`wavelength_pdf.predict.pixel_de2`), plus the path noise all candidates share
@@ -83,28 +85,40 @@ def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pi
                                      else tr.spread[pixels])))
 
 
-def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,
-                   pixel_sampler: str = "sobol", resolution: float = 0.1, pbrt: Path | None = None,
-                   transfer_spp: int = transfer.SPP, simple: bool = True,
-                   say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
-    """Every candidate's predicted error in ``scene`` at ``spp``, best first.
+#: The prefix of a polished candidate's name: "polished spd" is the ``spd`` table polished.
+POLISHED = "polished"
 
-    ``scene`` must be lit by one kind of light (its emitters' spectra equal up to scale);
-    ``tables`` maps names to :class:`~wavelength_pdf.table.Table`; ``simple`` adds the simple
-    samplers. The renders go to ``workdir`` and are kept while the scene and the renderer
-    are unchanged."""
+
+def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object],
+                    say: Callable[[str], None] = lambda m: None) -> dict[str, object]:
+    """Each of ``tables`` polished for ``tr``'s pixels at ``spp`` by the ``pixels`` objective
+    (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6: the low-discrepancy
+    pixel sampler's strata, with ``tr``'s spread where it has one), named "polished NAME".
+
+    A polish never comes out worse than its table by the objective, but which table it starts
+    from matters: it is a local search, and the lamp's emission table and J's table sit in
+    different basins (docs/benchmark.md, "A pixel's spread": from the emission table it wins
+    under FL7 and LED-B4, J's table stays better under FL11 and high-pressure sodium), so the
+    caller predicts every polish and keeps the best."""
+    from wavelength_pdf.optimize import optimize_for_pixels
+
+    out = {}
+    for name, table in tables.items():
+        say(f"choose: polishing {name} for the scene's pixels at {spp} spp")
+        try:
+            out[f"{POLISHED} {name}"] = optimize_for_pixels(spectrum, table, tr.t, tr.centres, spp,
+                                                            incoherence=tr.incoherence, terminated=tr.terminated,
+                                                            spread=tr.spread).table
+        except ValueError as e:  # a biased table is not polished (it is still predicted as given)
+            say(f"choose: {name} not polished: {e}")
+    return out
+
+
+def rank(spectrum, tr: transfer.Transfer, cands: Mapping[str, object], spp: int, pixel_sampler: str = "sobol",
+         say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
+    """Every candidate's predicted error in the scene ``tr`` is the transfer of, best first."""
     from wavelength_pdf import predict as P
 
-    check_spp(spp, pixel_sampler)
-    spectrum = transfer.one_kind(scene)
-    cands = dict(simple_tables(spectrum)) if simple else {}
-    for name, table in tables.items():
-        cands[name if name not in cands else f"{name} (given)"] = table
-    if not cands:
-        raise ValueError("no table to predict: give tables or keep the simple samplers")
-    say(f"choose: the scene's transfer ({transfer_spp} spp) and incoherence (2 x {transfer.INCOHERENCE_SPP} spp) "
-        f"at {resolution:g} of its size, in {workdir}")
-    tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp)
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     out, path = [], None
     for name, table in cands.items():
@@ -115,3 +129,61 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
             path = float(np.mean(P.path_de2(tr.t @ pc.target, tr.incoherence, spp)))
         out.append(Prediction(name, table, w, path))
     return sorted(out, key=lambda p: p.wavelength)
+
+
+def candidates(spectrum, tables: Mapping[str, object], simple: bool = True) -> dict[str, object]:
+    """The simple samplers' tables (with ``simple``) and the given ones (renamed "NAME (given)"
+    where a simple sampler has the name)."""
+    cands = dict(simple_tables(spectrum)) if simple else {}
+    for name, table in tables.items():
+        cands[name if name not in cands else f"{name} (given)"] = table
+    return cands
+
+
+def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object] = {}, *,
+              simple: bool = True, polish: bool = True, pixel_sampler: str = "sobol",
+              say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
+    """The table for the image ``tr`` is the transfer of, at ``spp``: the simple samplers
+    (``simple``) and ``tables``, with ``polish`` also the ``spd`` table and each of ``tables``
+    polished for the scene's pixels (:func:`polished_tables`), all ranked by their predicted
+    error (:func:`rank`), best first. Without ``tables`` this needs no optimizer run but the
+    polish (seconds). The polish models the low-discrepancy pixel sampler."""
+    check_spp(spp, pixel_sampler)
+    cands = candidates(spectrum, tables, simple)
+    if polish:
+        if pixel_sampler != "sobol":
+            raise ValueError("the polish models the low-discrepancy pixel sampler's strata (design §4.6), "
+                             f"not the {pixel_sampler} sampler")
+        from wavelength_pdf.stratified import METHODS
+
+        starts = {"spd": cands["spd"] if "spd" in cands else simple_tables(spectrum)["spd"],
+                  **{n: t for n, t in cands.items() if n not in METHODS}}
+        cands.update(polished_tables(spectrum, tr, spp, starts, say))
+    if not cands:
+        raise ValueError("no table to predict: give tables or keep the simple samplers")
+    return rank(spectrum, tr, cands, spp, pixel_sampler, say)
+
+
+def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,
+                   pixel_sampler: str = "sobol", resolution: float | tuple[int, int] = 0.1,
+                   pbrt: Path | None = None, transfer_spp: int = transfer.SPP, simple: bool = True,
+                   polish: bool = False, spread: bool = False,
+                   say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
+    """Every candidate's predicted error in ``scene`` at ``spp``, best first.
+
+    ``scene`` must be lit by one kind of light (its emitters' spectra equal up to scale);
+    ``tables`` maps names to :class:`~wavelength_pdf.table.Table`; ``simple`` adds the simple
+    samplers, ``polish`` the polished tables of :func:`for_image`. ``spread``: each pixel's
+    spread (:func:`.transfer.spread`, the spectra its samples see) in place of its
+    incoherence; it is a property of the pixels you render, so give ``resolution`` 1 (the
+    scene's own film) or the size you render at. The renders go to ``workdir`` and are kept
+    while the scene and the renderer are unchanged."""
+    check_spp(spp, pixel_sampler)
+    spectrum = transfer.one_kind(scene)
+    if not (simple or tables or polish):
+        raise ValueError("no table to predict: give tables or keep the simple samplers")
+    size = resolution if isinstance(resolution, tuple) else f"{resolution:g} of its size"
+    say(f"choose: the scene's transfer ({transfer_spp} spp) and incoherence (2 x {transfer.INCOHERENCE_SPP} spp) "
+        f"at {size}" + (", with each pixel's spread" if spread else "") + f", in {workdir}")
+    tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp, with_spread=spread)
+    return for_image(spectrum, tr, spp, tables, simple=simple, polish=polish, pixel_sampler=pixel_sampler, say=say)

@@ -47,7 +47,8 @@ def run_benchmark(spec: G.GridSpec, out: Path, *, workers: int | None = None, sc
     say(f"benchmark: planning {len(spec.jobs)} jobs (scene copies and baseline tables)")
     plans = [run.plan_job(job, out, spec.shared, pbrt) for job in spec.jobs]
     if render:
-        run.run(plans, workers=workers, scheduler=scheduler, nthreads=nthreads, say=say)
+        run.run(plans, workers=workers, scheduler=scheduler, nthreads=nthreads, say=say, out=out,
+                shared=spec.shared, pbrt=pbrt)
     else:
         # A grid stopped early: score the finished jobs, name the others.
         done = [p for p in plans if run.finished(p)]

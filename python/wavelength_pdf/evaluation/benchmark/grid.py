@@ -152,9 +152,17 @@ COLOUR_ROWS = (SCENE_COLOURS, PIXEL_SCENE)
 #: one per lamp like ``optimized``, rendered on the scene sweep, whose scenes show other
 #: colours, to see whether colours the table was not made for still gain over white.
 GENERIC_COLOURS = "optimized-colorchecker"
+#: The table a user gets for the job's image without an optimizer run of their own beyond
+#: J's: ``wavelength-pdf choose SCENE optimized.csv --polish --spread --spp 64``, the best by
+#: the image's predicted error (design §6.8) of the simple samplers, J's table and the ``spd``
+#: and J's tables polished for the scene's pixels (design §4.6), at IMAGE_SPP for every spp.
+#: On the lamp sweep's ColorChecker (its spread at 320 x 240 fits in memory; a 1280 x 720
+#: scene's would take gigabytes).
+IMAGE = "optimized-image"
+IMAGE_SPP = 64
 #: Every row a job can list (a lamp's earlier-work ``reference`` table, the check row and the
 #: floor are added by the job's plan, not listed).
-ROWS = (*TABLE_ROWS, *COLOUR_ROWS, GENERIC_COLOURS)
+ROWS = (*TABLE_ROWS, *COLOUR_ROWS, GENERIC_COLOURS, IMAGE)
 #: The simple samplers (no optimizer): "the best simple sampler" is the best of these.
 SIMPLE = ("uniform", "visible", "spd", "luminance", "xyz")
 #: Check row: pbrt-v4's own visible sampling, which the ``visible`` table must match.
@@ -238,7 +246,7 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
             # measured against a floor of their own, not the 16 spp one scaled.
             add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), sweep="lamps",
                        floor_spp=(16, 64) if s == "colorchecker" else (16,),
-                       rows=TABLE_ROWS + (COLOUR_ROWS if s == "colorchecker" else ())))
+                       rows=TABLE_ROWS + (COLOUR_ROWS + (IMAGE,) if s == "colorchecker" else ())))
     for s in SCENES.values():
         if s.key in ("project-box", "two-lamp-box"):
             continue
@@ -255,13 +263,15 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
 def small_grid(shared: Path = SHARED) -> GridSpec:
     """The suite's version: the project's own box under its tri-band lamp with both pixel
     samplers and the two-lamp box under its own lamps, tiny images and few samples, the simple
-    samplers and the optimizer's start (no optimization, no shared material needed)."""
+    samplers and the optimizer's start (no optimization, no shared material needed), and on
+    the low-discrepancy box the table ``choose --polish --spread`` picks (IMAGE: polishing
+    needs no optimizer run)."""
     g = GridSpec(shared=shared)
     tri = LampSpec("tri-band", str(CHECKOUT / "spectra" / "tri-band-fluorescent.spd"), "fluorescent", True)
     small = dict(resolution=(12, 12), spp=(4, 16), truth_spp=1024, floor_repeats=4, floor_spp=(4, 16),
                  check_spp=(4, 16), sweep="small")
     for ps in PIXEL_SAMPLERS:
-        add(g, Job(SCENES["project-box"], tri, ps, rows=(*SIMPLE, "start"), **small))
+        add(g, Job(SCENES["project-box"], tri, ps, rows=(*SIMPLE, "start", IMAGE), **small))
     add(g, Job(SCENES["two-lamp-box"], None, "sobol", rows=SIMPLE, **small))
     return g
 

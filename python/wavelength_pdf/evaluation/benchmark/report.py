@@ -338,7 +338,7 @@ def above_floor_share(rows: Sequence[dict], job: str, row: str, spp: int, measur
 
 
 def floor_table(rows: Sequence[dict], spp: int,
-                tables: Sequence[str] = ("optimized", G.PIXEL, *G.COLOUR_ROWS, G.GENERIC_COLOURS),
+                tables: Sequence[str] = ("optimized", G.PIXEL, *G.COLOUR_ROWS, G.GENERIC_COLOURS, G.IMAGE),
                 measure: str = MAIN) -> str:
     """Markdown: per regime, how many jobs have something to gain above the floor and in how
     many each table's error above the floor is at most ``FLOOR_SHARE`` of the best simple

@@ -134,7 +134,7 @@ def baseline_tables(spectrum: Spectrum, folder: Path, rows: Sequence[str], job: 
         if row in OPTIMIZED or row in OPTIMIZED_FOR_SET:
             paths[row] = folder / f"{row}.csv"
             continue
-        if row == "reference" or row in G.COLOUR_ROWS:
+        if row == "reference" or row in G.COLOUR_ROWS or row == G.IMAGE:
             continue
         path = folder / f"{row}.csv"
         if not path.is_file():
@@ -165,6 +165,11 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
             tables.update({row: folder / f"{row}.csv" for row in G.COLOUR_ROWS if row in job.rows})
         except SpectrumError:  # no diffuse colours in the scene (the glass of water): no such row
             rows = [row for row in rows if row not in G.COLOUR_ROWS]
+    if G.IMAGE in job.rows:
+        if job.lamp is None or job.pixel_sampler != "sobol":  # one kind of light, the polish's strata
+            rows = [row for row in rows if row != G.IMAGE]
+        else:
+            tables[G.IMAGE] = folder / f"{G.IMAGE}.csv"
     p = JobPlan(job, folder, scene, spectrum, tables, reflectances)
     for spp in job.spp:
         for seed in job.seeds:
@@ -208,11 +213,38 @@ def _made_by(row: str, p: JobPlan) -> tuple[object | None, str]:
     return None, OPTIMIZED[row]
 
 
+def image_table(p: JobPlan, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
+                say: Callable[[str], None] = lambda m: None) -> Path:
+    """Write the job's :data:`~.grid.IMAGE` table: ``wavelength-pdf choose``'s best with
+    ``--polish --spread`` at :data:`~.grid.IMAGE_SPP` (:func:`wavelength_pdf.evaluation.choose.for_image`),
+    its candidates the simple samplers and the job's J table (``optimized``, made first), from
+    the scene's transfer at its benchmark size (``out/transfer/SCENE``, rendered once)."""
+    from wavelength_pdf.evaluation import choose, transfer
+    from wavelength_pdf.evaluation.benchmark.predict import scene_transfer
+    from wavelength_pdf.table import Table
+
+    if p.job.resolution is None:
+        tr = scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True)
+    else:  # a size of its own: the transfer of the job's copy (its lamp is replaced by a flat one)
+        tr = transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True)
+    given = {"optimized": read_table(p.tables["optimized"])} if "optimized" in p.tables else {}
+    preds = choose.for_image(p.spectrum, tr, G.IMAGE_SPP, given, say=say)
+    best = preds[0]
+    path = p.tables[G.IMAGE]
+    write_table(path, Table(best.table.grid, best.table.pdfs, [
+        *best.table.comments, f"{G.IMAGE}: {best.name}, best of {len(preds)} by the predicted image error at "
+        f"{G.IMAGE_SPP} spp ({', '.join(f'{q.name} {q.wavelength:.4g}' for q in preds)})"]))
+    return path
+
+
 def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str | None = None,
-        nthreads: int | None = None, say: Callable[[str], None] | None = None) -> None:
+        nthreads: int | None = None, say: Callable[[str], None] | None = None, out: Path | None = None,
+        shared: Path = G.SHARED, pbrt: Path | None = None) -> None:
     """Optimize the missing tables and render every image not rendered yet, on a Dask cluster
     (a local one of ``workers`` processes, or the one at ``scheduler``); prints the estimated
-    CPU time first and follows the renders with a progress bar."""
+    CPU time first and follows the renders with a progress bar. The :data:`~.grid.IMAGE`
+    tables (which need the J tables and the scene's transfer) are made here, after the
+    optimized tables, in this process (``out``: the benchmark's folder)."""
     from distributed import as_completed
 
     from wavelength_pdf import progress
@@ -242,6 +274,14 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
             with progress.bar(total=len(made), desc="tables", file=sys.stderr, unit="table") as bar:
                 for f in as_completed(list(made.values())):
                     f.result()
+                    bar.update(1)
+        image = [p for p in plans if G.IMAGE in p.tables and not p.tables[G.IMAGE].is_file()]
+        if image:
+            if out is None:
+                raise ValueError(f"the {G.IMAGE} row needs the benchmark's folder (out)")
+            with progress.bar(total=len(image), desc=G.IMAGE, file=sys.stderr, unit="table") as bar:
+                for p in image:
+                    image_table(p, out, shared, pbrt)
                     bar.update(1)
         futures = []
         # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),

@@ -9,6 +9,7 @@ import pytest
 
 from wavelength_pdf.evaluation.benchmark import grid as G
 from wavelength_pdf.evaluation.benchmark import measures as M
+from wavelength_pdf.table import read_table
 
 
 def _image(rng, shape=(40, 50), level=0.3):
@@ -256,6 +257,21 @@ def test_measures_agree_and_sampling_the_lamp_pays(small):
             u = _rows(rows, job=r["job"], row="uniform", spp=16)[0]
             f = _rows(rows, job=r["job"], row=G.FLOOR, spp=16)[0]
             assert u["de2"] > 2 * r["de2"] > 2 * 0.5 * f["de2"]
+
+
+def test_the_image_row_is_the_predicted_best_of_its_candidates(small):
+    """The IMAGE row (``choose --polish --spread``'s table) renders on the low-discrepancy job
+    under one lamp only (not with independent samples, not under several kinds of light), and
+    its table records which candidate won and every candidate's prediction, the winner's the
+    least."""
+    out, rows, _, _ = small
+    assert {r["job"] for r in rows if r["row"] == G.IMAGE} == {"project-box/tri-band/sobol"}
+    table = out / "jobs" / "project-box" / "tri-band" / "sobol" / f"{G.IMAGE}.csv"
+    note = next(c for c in read_table(table).comments if c.startswith(f"{G.IMAGE}: "))
+    name, _, rest = note[len(G.IMAGE) + 2:].partition(", best of ")
+    predicted = dict(p.rsplit(" ", 1) for p in rest[rest.index("(") + 1:rest.rindex(")")].split(", "))
+    assert set(predicted) == {*G.SIMPLE, "polished spd"} and name in predicted
+    assert float(predicted[name]) == min(float(v) for v in predicted.values())
 
 
 def test_outputs_and_resume(small):

@@ -92,3 +92,51 @@ def test_a_scene_without_a_film_gets_a_spectral_one(tmp_path, pbrt, capsys):
     copy = (work / "scene.pbrt").read_text()
     assert copy.count("Film ") == 1 and copy.index("Film ") < copy.index("WorldBegin")
     assert '"integer xresolution" [ 26 ] "integer yresolution" [ 14 ]' in copy and '"spectral"' in copy
+
+
+def test_the_polish_is_never_predicted_worse_than_the_table_it_started_from(box_predictions, pbrt):
+    """``--polish`` adds the spd table and each given table polished for the box's pixels
+    (design §4.6): each polish is predicted no worse than its start, since the ``pixels``
+    objective is the prediction itself, and the ranking still runs best first."""
+    _, work = box_predictions
+    from wavelength_pdf.evaluation import transfer
+
+    spd = choose.simple_tables(transfer.one_kind(BOX))["spd"]
+    preds = choose.predict_tables(BOX, {"copy-of-spd": spd}, 16, work, resolution=0.08, pbrt=pbrt,
+                                  transfer_spp=128, polish=True)
+    by = {p.name: p for p in preds}
+    assert set(by) == {*stratified.METHODS, "copy-of-spd", "polished spd", "polished copy-of-spd"}
+    assert [p.wavelength for p in preds] == sorted(p.wavelength for p in preds)
+    for start in ("spd", "copy-of-spd"):
+        assert by[f"polished {start}"].wavelength <= by[start].wavelength * (1 + 1e-9)
+    for name in ("polished spd", "polished copy-of-spd"):  # four densities on the start's grid
+        t = by[name].table
+        np.testing.assert_array_equal(np.asarray(t.grid), np.asarray(spd.grid))
+        np.testing.assert_allclose(np.trapezoid(np.asarray(t.pdfs), np.asarray(t.grid), axis=-1), 1.0, atol=1e-9)
+
+
+def test_the_spread_is_measured_at_the_scenes_own_size(tmp_path, pbrt, capsys):
+    """``--spread --polish`` on a tiny scene: the transfer is the scene's own film size with
+    a spread per lit pixel, and the written best table is one of the candidates."""
+    text = (REPO / "tests" / "data" / "scenes" / "inline.pbrt").read_text()
+    scene = tmp_path / "lamp.pbrt"  # a lamp that emits over the whole range, so its spd table is healthy
+    scene.write_text(text.replace("[ 400 0.0  450 1.0", "[ 380 0.3  450 1.0").replace("700 0.0 ]", "780 0.2 ]"))
+    work, out = tmp_path / "work", tmp_path / "best.csv"
+    assert main(["choose", str(scene), "--spp", "4", "--transfer-spp", "16", "--spread", "--polish",
+                 "--workdir", str(work), "--pbrt", str(pbrt), "--quiet", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "polished spd" in text and out.is_file()
+    copy = (work / "scene.pbrt").read_text()
+    assert '"integer xresolution" [ 8 ] "integer yresolution" [ 8 ]' in copy
+    assert (work / "spread").is_dir()
+
+
+@pytest.mark.parametrize("args, message", [
+    ([str(BOX), "--spread", "--resolution-scale", "0.5"], "film size"),
+    ([str(BOX), "--polish", "--pixel-sampler", "independent"], "low-discrepancy"),
+])
+def test_the_polish_and_the_spread_refuse_what_they_do_not_model(args, message, tmp_path, capsys):
+    work = tmp_path / "work"
+    assert main(["choose", *args, "--workdir", str(work)]) == 2
+    assert message in capsys.readouterr().err
+    assert not work.exists()
