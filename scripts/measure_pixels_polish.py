@@ -13,6 +13,7 @@ table's render of the scene lit by the lamp, alternating table by table, and the
 needed), with the CPU seconds each image records. With ``--floor`` also the benchmark's
 floor, and each table's ``de2`` above it over J's (``above_floor_vs_J``): the part of the
 error the prediction speaks of, where path noise would otherwise pull every ratio towards 1.
+``--choose`` adds the table ``wavelength-pdf choose --polish`` picks (row ``image``).
 ``--simple`` adds the benchmark's other simple samplers, and with ``--floor`` each table's
 error above the floor over the best simple sampler's (``above_floor_vs_best_simple``). With
 ``--spread`` the transfer carries each pixel's spread (``transfer.spread``: the spectra a
@@ -44,7 +45,7 @@ from wavelength_pdf.cli.evaluate import _resolution  # noqa: E402  (evaluate's -
 from wavelength_pdf.evaluation import transfer  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.grid import Job  # noqa: E402
 from wavelength_pdf.evaluation.benchmark.measures import _delta_e, lit_pixels  # noqa: E402
-from wavelength_pdf.evaluation.choose import simple_tables, wavelength_error  # noqa: E402
+from wavelength_pdf.evaluation.choose import for_image, simple_tables, wavelength_error  # noqa: E402
 from wavelength_pdf.evaluation.metrics import rgb_to_lab  # noqa: E402
 from wavelength_pdf.evaluation.scene_edit import edit_scene  # noqa: E402
 from wavelength_pdf.exr import read_header, read_rgb  # noqa: E402
@@ -72,6 +73,10 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
                                    incoherence=aim.incoherence, terminated=aim.terminated, spread=aim.spread)
     polish_s = time.monotonic() - start
     tables = {"lamp": lamp, "J": J, "pixels": polished.table}
+    chosen = ""
+    if a.choose:  # the product's choice: wavelength-pdf choose SCENE J.csv --polish [--spread]
+        best = for_image(spectrum, tr, a.spp, {"J": J})[0]
+        tables["image"], chosen = best.table, best.name
     if a.simple:  # the benchmark's other simple samplers (the lamp's table is its spd)
         tables.update({k: v for k, v in simple_tables(spectrum).items() if k != "spd"})
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
@@ -110,7 +115,7 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
     floor = float(np.mean(de2["floor"])) if a.floor else None
     shown = scene.relative_to(REPO) if scene.is_relative_to(REPO) else scene
     polish = f"from {a.polish_from}" + (", coherent" if a.coherent else "") + (", spread" if a.spread else "")
-    simple = [n for n in tables if n not in ("J", "pixels")]
+    simple = [n for n in tables if n not in ("J", "pixels", "image")]
     best_simple = min(float(np.mean(de2[n])) for n in simple) - floor if floor is not None and a.simple else None
     rows = []
     for name in runs:
@@ -129,7 +134,8 @@ def measure(scene: Path, spectrum, a: argparse.Namespace, work: Path) -> list[di
                      **{f"predicted_{spp}spp": f"{predicted[name][spp]:.4g}" if is_table else "" for spp in spps},
                      "predicted_vs_J": f"{predicted[name][a.spp] / predicted['J'][a.spp]:.3f}" if is_table else "",
                      f"predicted_coherent_{a.spp}spp": f"{coherent[name]:.4g}" if is_table else "",
-                     "polish_s": f"{polish_s:.1f}" if name == "pixels" else ""})
+                     "polish_s": f"{polish_s:.1f}" if name == "pixels" else "",
+                     "chosen": chosen if name == "image" else ""})
     return rows
 
 
@@ -166,6 +172,10 @@ def main() -> int:
                     help="also render the benchmark's other simple samplers (uniform, visible, luminance, xyz; the "
                          "lamp's table is its spd) and, with --floor, give each table's de2 above the floor over "
                          "the best simple sampler's")
+    ap.add_argument("--choose", action="store_true",
+                    help="also the table `wavelength-pdf choose SCENE J.csv --polish` picks (row `image`: the best "
+                         "by the prediction of the simple samplers, J's table and both polished; with --spread, "
+                         "as choose --spread)")
     ap.add_argument("--out", type=Path, help="write the rows as CSV here")
     a = ap.parse_args()
     if a.spp < 4 or a.pairs < 2:
