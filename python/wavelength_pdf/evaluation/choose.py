@@ -109,7 +109,8 @@ def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[s
             out[f"{POLISHED} {name}"] = optimize_for_pixels(spectrum, table, tr.t, tr.centres, spp,
                                                             incoherence=tr.incoherence, terminated=tr.terminated,
                                                             spread=tr.spread).table
-        except ValueError as e:  # a biased table is not polished (it is still predicted as given)
+        except ValueError as e:  # one the health rule refuses (biased, or of infinite variance: a
+            # lamp dark over part of the range) is not polished; it is still predicted as given
             say(f"choose: {name} not polished: {e}")
     return out
 
@@ -140,7 +141,7 @@ def candidates(spectrum, tables: Mapping[str, object], simple: bool = True) -> d
     return cands
 
 
-def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object] = {}, *,
+def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object] | None = None, *,
               simple: bool = True, polish: bool = True, pixel_sampler: str = "sobol",
               say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
     """The table for the image ``tr`` is the transfer of, at ``spp``: the simple samplers
@@ -149,7 +150,7 @@ def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, ob
     error (:func:`rank`), best first. Without ``tables`` this needs no optimizer run but the
     polish (seconds). The polish models the low-discrepancy pixel sampler."""
     check_spp(spp, pixel_sampler)
-    cands = candidates(spectrum, tables, simple)
+    cands = candidates(spectrum, tables or {}, simple)
     if polish:
         if pixel_sampler != "sobol":
             raise ValueError("the polish models the low-discrepancy pixel sampler's strata (design §4.6), "

@@ -156,8 +156,9 @@ GENERIC_COLOURS = "optimized-colorchecker"
 #: J's: ``wavelength-pdf choose SCENE optimized.csv --polish --spread --spp 64``, the best by
 #: the image's predicted error (design §6.8) of the simple samplers, J's table and the ``spd``
 #: and J's tables polished for the scene's pixels (design §4.6), at IMAGE_SPP for every spp.
-#: On the lamp sweep's ColorChecker (its spread at 320 x 240 fits in memory; a 1280 x 720
-#: scene's would take gigabytes).
+#: On the lamp sweep's ColorChecker (32 x 24: each choice about 12 s). The scene sweep's
+#: copies could carry it too (a spread is 21 x 21 floats per lit pixel, 200 MB at 320 x 180),
+#: not yet measured there.
 IMAGE = "optimized-image"
 IMAGE_SPP = 64
 #: Every row a job can list (a lamp's earlier-work ``reference`` table, the check row and the
