@@ -449,18 +449,15 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
         share = per_pixel("terminated", terminated, 1.0)
         cov = (1.0 - share) ** 2 * cov + share ** 2 * (1.0 + r) * quad(np.asarray(one_wavelength)) / spp
     xyz = t @ pc.target
-    de2 = lab_quadratic(xyz, cov, metric)
-    if spread is not None:
-        # A measured spread is noisy, its covariance indefinite in some pixels: measured
-        # linearly (the objective's form, tr(A C)), its noise cancels in the mean over pixels,
-        # where lab_quadratic's clipping of negative variances would bias it upwards.
-        if metric == "lab":
-            jac = _lab_jacobians(xyz)
-            A = np.swapaxes(jac, 1, 2) @ jac
-        else:
-            A = xyz_metrics(xyz)
-        de2 = de2 + np.einsum("pij,pij->p", A, (1.0 - share) ** 2 * spread_cov)
-    return de2
+    if spread is None:
+        return lab_quadratic(xyz, cov, metric)
+    jac = _lab_jacobians(xyz)  # once, for both terms
+    de2 = lab_quadratic(xyz, cov, metric, jac=jac)
+    # A measured spread is noisy, its covariance indefinite in some pixels: measured linearly
+    # (the objective's form, tr(A C)), its noise cancels in the mean over pixels, where
+    # lab_quadratic's clipping of negative variances would bias it upwards.
+    A = np.swapaxes(jac, 1, 2) @ jac if metric == "lab" else xyz_metrics(xyz, jac=jac)
+    return de2 + np.einsum("pij,pij->p", A, (1.0 - share) ** 2 * spread_cov)
 
 
 def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int) -> np.ndarray:
@@ -486,15 +483,17 @@ def path_de2(xyz: np.ndarray, incoherence: np.ndarray, spp: int, metric: str = "
     return lab_quadratic(xyz, cov, metric)
 
 
-def lab_quadratic(xyz: np.ndarray, cov: np.ndarray, metric: str = "de2000") -> np.ndarray:
+def lab_quadratic(xyz: np.ndarray, cov: np.ndarray, metric: str = "de2000",
+                  jac: np.ndarray | None = None) -> np.ndarray:
     """Per pixel, E[d(Lab(xyz + e), Lab(xyz))^2] for a zero-mean error e of covariance ``cov``
     (P, 3, 3), linearised: the covariance mapped to Lab by the Jacobian at each colour and
     measured by CIEDE2000's local quadratic form along its principal axes (as
-    :func:`expected_quadratic`, vectorised), or by Lab distance (``metric='lab'``)."""
+    :func:`expected_quadratic`, vectorised), or by Lab distance (``metric='lab'``). ``jac``:
+    :func:`_lab_jacobians` at ``xyz``, where the caller has it already."""
     import colour
 
     white = _white_xy()
-    jac = _lab_jacobians(xyz)
+    jac = _lab_jacobians(xyz) if jac is None else jac
     cov_lab = jac @ cov @ np.swapaxes(jac, 1, 2)
     s, V = np.linalg.eigh(0.5 * (cov_lab + np.swapaxes(cov_lab, 1, 2)))
     s = np.clip(s, 0.0, None)
@@ -522,18 +521,19 @@ def _lab_jacobians(xyz: np.ndarray) -> np.ndarray:
                      for e in np.eye(3)], axis=-1)
 
 
-def xyz_metrics(xyz: np.ndarray) -> np.ndarray:
+def xyz_metrics(xyz: np.ndarray, jac: np.ndarray | None = None) -> np.ndarray:
     """CIEDE2000's local quadratic form in XYZ at each colour (P, 3, 3): A = Jl' G Jl, so that
     E[CIEDE2000(xyz + e, xyz)^2] ~ tr(A Cov(e)) for a small error e, G the form in Lab
     (:func:`wavelength_pdf.problem.de2000_metric`, the ``stratified`` objective's): it is
     :func:`lab_quadratic`'s form as a matrix, for objectives that are linear in a covariance
-    (:func:`pixel_weights`)."""
+    (:func:`pixel_weights`). ``jac``: :func:`_lab_jacobians` at ``xyz``, where the caller has
+    it already."""
     import colour
 
     from wavelength_pdf.problem import de2000_metric
 
     xyz = np.atleast_2d(np.asarray(xyz, dtype=np.float64))
-    jac = _lab_jacobians(xyz)
+    jac = _lab_jacobians(xyz) if jac is None else jac
     return np.swapaxes(jac, 1, 2) @ de2000_metric(colour.XYZ_to_Lab(xyz, _white_xy())) @ jac
 
 
