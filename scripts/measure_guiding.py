@@ -13,7 +13,9 @@ pre-pass writes the mixtures' spectra, ``wavelength-pdf batch`` optimizes them, 
 them; the optimizer's seconds are reported apart, since its tables are cached by content and
 serve every later render of the scene), guided with the tables ``wavelength-pdf choose-guiding``
 keeps per mixture among its emission table and the optimized routes of ``--choose-from`` (the
-prediction's renders reported apart too, as ``choose_s``), and the floor (emission sampling with
+prediction's renders reported apart too, as ``choose_s``), guided with the tables
+``choose-guiding --polish`` keeps among those and each of them and the emission table polished
+for its table's pixels (``guided-polished``), and the floor (emission sampling with
 ``--wavelength-repeats 8``: what is left when wavelength noise is all but gone, design §6.7).
 The renders run one at a time, the samplers alternating seed by seed; the CSV gives each
 sampler's CPU seconds (mean, least, most). ``--per-table`` breaks each sampler's error down by
@@ -53,6 +55,7 @@ SAMPLERS = {
     "guided": ("--wavelength-guiding",),
     "guided-optimized": ("--wavelength-guiding",),  # + --wavelength-guiding-tables, below
     "guided-chosen": ("--wavelength-guiding",),     # the same, the tables choose-guiding kept
+    "guided-polished": ("--wavelength-guiding",),   # the same, choose-guiding --polish's
     "floor": ("--wavelength-sampling", "emission", "--wavelength-repeats", "8"),
 }
 
@@ -92,16 +95,18 @@ def optimized_tables(pbrt: Path, scene: Path, spectra: Path, work: Path, threads
 
 
 def chosen_tables(pbrt: Path, scene: Path, spectra: Path, routes: dict[str, Path], spp: int,
-                  work: Path) -> tuple[Path | None, float, str]:
-    """``wavelength-pdf choose-guiding`` over the optimized routes: (the folder, None when every
+                  work: Path, polish: bool = False) -> tuple[Path | None, float, str]:
+    """``wavelength-pdf choose-guiding`` over the optimized routes (with ``polish``, also each
+    route and the emission tables polished for their pixels): (the folder, None when every
     mixture keeps its emission table; seconds; each table's choice)."""
     from wavelength_pdf.evaluation.guiding_choice import EMISSION, choose_guiding_tables
 
     start = time.perf_counter()
-    choices = choose_guiding_tables(scene, spectra, routes, spp, work / "chosen", work / "transfer", pbrt=pbrt)
+    folder = work / ("polished" if polish else "chosen")
+    choices = choose_guiding_tables(scene, spectra, routes, spp, folder, work / "transfer", pbrt=pbrt, polish=polish)
     picks = " ".join(f"{c.table}:{c.chosen}" for c in choices)
     kept = any(c.chosen != EMISSION for c in choices)
-    return (work / "chosen" if kept else None), time.perf_counter() - start, picks
+    return (folder if kept else None), time.perf_counter() - start, picks
 
 
 def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.ndarray, mask: np.ndarray) -> None:
@@ -111,7 +116,8 @@ def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.nda
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "guided-chosen", "floor") if s in maps]
+    shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "guided-chosen", "guided-polished",
+                                 "floor") if s in maps]
     first = {s: maps[s][0] for s in shown}
     top = float(np.percentile(np.concatenate([m[mask] for m in first.values()]), 99))
     fig, axes = plt.subplots(1, 2 + len(shown), figsize=(3.2 * (2 + len(shown)), 3.0), constrained_layout=True)
@@ -183,7 +189,7 @@ def main() -> int:
                     "for (wavelength-pdf batch --reflectances): white (default), colorchecker, scene (the "
                     "scene's own materials) or a reflectance CSV")
     ap.add_argument("--choose-from", nargs="+", default=["white", "scene"], metavar="COLOURS",
-                    help="guided-chosen: the optimized routes (as --colours) that wavelength-pdf choose-guiding "
+                    help="guided-chosen and guided-polished: the optimized routes (as --colours) that wavelength-pdf choose-guiding "
                          "chooses from, table by table, beside the emission tables (default: white scene)")
     ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
     ap.add_argument("--per-table", type=Path, metavar="CSV",
@@ -202,11 +208,13 @@ def main() -> int:
                                resolution=tuple(a.size))
             common = ["--quiet", "--nthreads", str(a.threads), "--spp", str(a.spp), *a.render_args.split()]
             guiding = tuple(a.guiding_args.split())
-            tables, optimizer_s, chosen, choose_s, picks = None, float("nan"), None, float("nan"), ""
-            if {"guided-optimized", "guided-chosen"} & set(samplers):
+            tables, optimizer_s = None, float("nan")
+            # guided-chosen and guided-polished: (tables folder, choose-guiding's seconds, its choices)
+            chosen: dict[str, tuple[Path | None, float, str]] = {}
+            choosing = [s for s in ("guided-chosen", "guided-polished") if s in samplers]
+            if {"guided-optimized", *choosing} & set(samplers):
                 spectra = mixture_spectra(a.pbrt, scene, common, guiding, tmp / name)
-                needed = ([a.colours] if "guided-optimized" in samplers else []) + \
-                    (a.choose_from if "guided-chosen" in samplers else [])
+                needed = ([a.colours] if "guided-optimized" in samplers else []) + (a.choose_from if choosing else [])
                 routes = {c: optimized_tables(a.pbrt, scene, spectra, tmp / name, a.threads, a.batch_args.split(), c)
                           for c in dict.fromkeys(needed)}
                 for c, (folder, secs) in routes.items():
@@ -214,11 +222,11 @@ def main() -> int:
                           f"{secs:.1f} s", file=sys.stderr)
                 if "guided-optimized" in samplers:
                     tables, optimizer_s = routes[a.colours]
-                if "guided-chosen" in samplers:
-                    chosen, choose_s, picks = chosen_tables(a.pbrt, scene, spectra,
-                                                            {c: routes[c][0] for c in a.choose_from}, a.spp,
-                                                            tmp / name)
-                    print(f"{name}: choose-guiding in {choose_s:.1f} s: {picks}", file=sys.stderr)
+                for s in choosing:
+                    chosen[s] = chosen_tables(a.pbrt, scene, spectra, {c: routes[c][0] for c in a.choose_from},
+                                              a.spp, tmp / name, polish=s == "guided-polished")
+                    print(f"{name}: choose-guiding{' --polish' if s == 'guided-polished' else ''} in "
+                          f"{chosen[s][1]:.1f} s: {chosen[s][2]}", file=sys.stderr)
             images = {sampler: [] for sampler in samplers}
             cpu = {sampler: [] for sampler in samplers}
             prepass, guide_bytes = {}, {}
@@ -231,8 +239,8 @@ def main() -> int:
                         args = args + guiding
                     if sampler == "guided-optimized":
                         args = args + ("--wavelength-guiding-tables", str(tables))
-                    if sampler == "guided-chosen" and chosen is not None:
-                        args = args + ("--wavelength-guiding-tables", str(chosen))
+                    if sampler in chosen and chosen[sampler][0] is not None:
+                        args = args + ("--wavelength-guiding-tables", str(chosen[sampler][0]))
                     out = tmp / f"{name}-{sampler}-{seed}.exr"
                     r = subprocess.run([str(a.pbrt), *common, "--seed", str(seed), "--outfile", str(out), *args,
                                         str(scene)],
@@ -293,13 +301,13 @@ def main() -> int:
                              "above_floor_vs_emission": f"{(de2 - floor) / (e_em - floor):.3f}" if "floor" in result else "",
                              "optimizer_s": (f"{optimizer_s:.1f}" if sampler == "guided-optimized" else
                                              f"{sum(routes[c][1] for c in a.choose_from):.1f}"
-                                             if sampler == "guided-chosen" else ""),
+                                             if sampler in chosen else ""),
                              "colours": (a.colours if sampler == "guided-optimized" else
-                                         "+".join(a.choose_from) if sampler == "guided-chosen" else ""),
+                                         "+".join(a.choose_from) if sampler in chosen else ""),
                              # choose-guiding's seconds (its renders of the scene, cached like the
                              # tables) and each table's choice
-                             "choose_s": f"{choose_s:.1f}" if sampler == "guided-chosen" else "",
-                             "choices": picks if sampler == "guided-chosen" else "",
+                             "choose_s": f"{chosen[sampler][1]:.1f}" if sampler in chosen else "",
+                             "choices": chosen[sampler][2] if sampler in chosen else "",
                              # the pre-pass and the tables' share of the render's CPU time, and the
                              # guide's memory (tables + tile map) against the film's 32 bytes a pixel
                              "prepass_share": f"{np.mean(prepass[sampler]) / t:.4f}" if sampler in prepass else "",

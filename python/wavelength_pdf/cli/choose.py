@@ -63,6 +63,10 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
         raise BadInput(f"--resolution-scale must lie in (0, 1], not {args.resolution_scale:g}")
     if not 0 <= args.margin < 1:
         raise BadInput(f"--margin must lie in [0, 1), not {args.margin:g}")
+    if args.polish and args.pixel_sampler != "sobol":
+        raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
+    if not args.candidates and not args.polish:
+        raise BadInput("nothing to choose from: give folders of optimized tables (TABLES) or --polish")
     candidates = {}
     for c in args.candidates:
         name, _, folder = c.rpartition("=") if "=" in c else (Path(c).name, "", c)
@@ -75,15 +79,18 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
         choices = choose_guiding_tables(args.scene, args.spectra, candidates, args.spp, args.output, workdir,
                                         margin=args.margin, pixel_sampler=args.pixel_sampler,
                                         resolution=args.resolution_scale,
-                                        pbrt=args.pbrt, transfer_spp=args.transfer_spp, say=say)
+                                        pbrt=args.pbrt, transfer_spp=args.transfer_spp, polish=args.polish,
+                                        say=say)
     except ValueError as e:
         raise BadInput(str(e)) from None
-    names = [EMISSION, *candidates]
+    names = list(dict.fromkeys([EMISSION, *candidates, *(n for c in choices for n in c.predicted)]))
     print(f"{args.scene} at {args.spp} spp ({args.pixel_sampler}): each guiding table's predicted mean squared "
           "CIEDE2000 of its wavelengths over its pixels")
-    print("  table  pixels  " + "  ".join(f"{n:>10}" for n in names) + "  chosen")
+    widths = [max(10, len(n)) for n in names]
+    print("  table  pixels  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths)) + "  chosen")
     for c in choices:
-        cells = "  ".join(f"{c.predicted[n]:10.4g}" if n in c.predicted else f"{'-':>10}" for n in names)
+        cells = "  ".join(f"{c.predicted[n]:{w}.4g}" if n in c.predicted else f"{'-':>{w}}"
+                          for n, w in zip(names, widths))
         print(f"  {c.table:5d}  {c.pixels:6d}  {cells}  {c.chosen}")
     kept = sum(c.chosen != EMISSION for c in choices)
     print(f"wrote {args.output}: {kept} optimized table(s) of {len(choices)} and choice.csv")
@@ -154,13 +161,17 @@ def add_parser(sub) -> None:
                     "(e.g. optimized for the white surface and for the scene's materials). docs/guiding.md.")
     g.add_argument("scene", type=Path, metavar="SCENE.pbrt", help="the pbrt-v4 scene")
     g.add_argument("spectra", type=Path, metavar="SPECTRA", help="the folder --wavelength-guiding-spectra wrote")
-    g.add_argument("candidates", nargs="+", metavar="[NAME=]TABLES",
-                   help="folders of optimized mixture tables (mixture-HASH.csv), named by NAME or the folder's name")
+    g.add_argument("candidates", nargs="*", metavar="[NAME=]TABLES",
+                   help="folders of optimized mixture tables (mixture-HASH.csv), named by NAME or the folder's "
+                        "name (none with --polish: the emission tables polished, no optimizer run)")
     g.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="the folder to write (replaced when it holds an earlier choice)")
     g.add_argument("--margin", type=float, default=0.1, metavar="F",
                    help="keep an optimized table only where its predicted error is below (1 - F) times the "
                         "emission table's (default 0.1: the prediction is an approximation in scenes with "
                         "several kinds of light)")
+    g.add_argument("--polish", action="store_true",
+                   help="also each mixture's emission table and each folder's table polished for the pixels "
+                        "of its guiding table at --spp (the pixels objective, design §4.6; seconds each)")
     _prediction_options(g, 0.5)
     g.set_defaults(func=cmd_choose_guiding, extra="evaluation")

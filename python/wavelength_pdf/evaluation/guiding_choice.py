@@ -221,27 +221,39 @@ class MixtureChoice:
 def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Mapping[str, str | Path],
                           spp: int, out: str | Path, workdir: str | Path, *,
                           margin: float = 0.1, pixel_sampler: str = "sobol", resolution: float = 0.5,
-                          pbrt: Path | None = None, transfer_spp: int = transfer.SPP,
+                          pbrt: Path | None = None, transfer_spp: int = transfer.SPP, polish: bool = False,
                           say: Callable[[str], None] = lambda m: None) -> list[MixtureChoice]:
     """Choose each guiding table's table among its emission table and ``candidates`` (name ->
     folder of ``mixture-HASH.csv``, as ``wavelength-pdf batch`` writes), write the chosen
     optimized ones and ``choice.csv`` to ``out`` (replaced whole, never left half written),
-    and return the choices. Every input is read and checked before the renders."""
+    and return the choices. Every input is read and checked before the renders.
+
+    ``polish``: also each mixture's emission table and each candidate's table polished for the
+    pixels of its guiding table (:func:`polish_for_pixels`), named "polished NAME"; a chosen one
+    is written as it was polished, and the renderer mixes the defensive share into it as into
+    any table it reads."""
     from wavelength_pdf import predict as P
-    from wavelength_pdf.evaluation.choose import check_spp, wavelength_error
+    from wavelength_pdf.evaluation.choose import POLISHED, check_spp, wavelength_error
     from wavelength_pdf.spectra import read_spd
     from wavelength_pdf.table import read_table
 
     spectra, out = Path(spectra), Path(out)
     check_spp(spp, pixel_sampler)
+    if polish and pixel_sampler != "sobol":
+        raise ValueError("the polish models the low-discrepancy pixel sampler's strata (design §4.6), "
+                         f"not the {pixel_sampler} sampler")
     if not 0 <= margin < 1:
         raise ValueError(f"margin must lie in [0, 1), not {margin:g}")
     for name in ("clusters.txt", "tiles.txt", "defensive.txt"):
         if not (spectra / name).is_file():
             raise ValueError(f"{spectra}: no {name} (write the folder with pbrt --wavelength-guiding "
                              "--wavelength-guiding-spectra DIR at the render's settings)")
+    if not candidates and not polish:
+        raise ValueError("nothing to choose from: give folders of optimized tables, or polish")
     if EMISSION in candidates:
         raise ValueError(f"{EMISSION!r} names the mixtures' own emission tables; name the candidates otherwise")
+    if polish and any(n.startswith(f"{POLISHED} ") for n in candidates):
+        raise ValueError(f"'{POLISHED} NAME' names the polished tables; name the candidates otherwise")
     for name, folder in candidates.items():
         if not Path(folder).is_dir():
             raise ValueError(f"{folder}: no such folder of tables (candidate {name!r})")
@@ -253,7 +265,9 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         raise ValueError(f"{spectra}: tiles.txt and clusters.txt do not match (tables {sorted(mixtures)}, "
                          f"tile indices up to {tiles.index.max()})")
     lam, phi, S = read_defensive(spectra / "defensive.txt")
-    lamps, tables = {}, {}
+    # tables: as the renderer samples them (the prediction's); given: as read (the polish's starts,
+    # and what is written out: the renderer mixes the defensive share into what it reads)
+    lamps, tables, given = {}, {}, {}
     for k, mix in mixtures.items():
         lamps[k] = read_spd(spectra / f"{mix}.spd", transfer.LO, transfer.HI)
         own = spectra / f"table-{k}.txt"
@@ -261,12 +275,13 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         if emission is None or not any(c.strip().startswith("source: stratified") for c in emission.comments):
             raise ValueError(f"{own}: missing or not an emission table (write the folder without "
                              "--wavelength-guiding-tables)")
-        tables[k] = {EMISSION: emission}
+        tables[k], given[k] = {EMISSION: emission}, {EMISSION: emission}
         for name, folder in candidates.items():
             path = Path(folder) / f"{mix}.csv"
             if path.is_file():  # read (and refused) before any render
-                tables[k][name] = with_defensive(read_table(path), lam, phi, S)
-    if not any(len(t) > 1 for t in tables.values()):
+                given[k][name] = read_table(path)
+                tables[k][name] = with_defensive(given[k][name], lam, phi, S)
+    if candidates and not any(len(t) > 1 for t in tables.values()):
         raise ValueError(f"none of the folders {', '.join(map(str, candidates.values()))} holds a table of "
                          f"these mixtures ({', '.join(sorted(mixtures.values()))})")
 
@@ -287,6 +302,10 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     for k, mix in sorted(mixtures.items()):
         pixels = of_pixel == k
         sel = pixels if pixels.any() else np.ones_like(pixels)
+        if polish:
+            for name, table in polish_for_pixels(lamps[k], given[k], tr, sel, spp, f"table {k} ({mix})", say).items():
+                given[k][name] = table
+                tables[k][name] = with_defensive(table, lam, phi, S)
         predicted = {}
         for name, table in tables[k].items():
             say(f"choose-guiding: table {k} ({mix}), predicting {name}")
@@ -295,13 +314,39 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         best = min((n for n in predicted if n != EMISSION), key=predicted.get, default=EMISSION)
         chosen = best if predicted[best] < (1 - margin) * predicted[EMISSION] else EMISSION
         choices.append(MixtureChoice(k, mix, int(pixels.sum()), predicted, chosen))
-    write_choice(out, choices, candidates)
+    write_choice(out, choices, {c.table: Path(candidates[c.chosen]) / f"{c.mixture}.csv" if c.chosen in candidates
+                                else given[c.table][c.chosen] for c in choices if c.chosen != EMISSION})
     return choices
 
 
-def write_choice(out: Path, choices: list[MixtureChoice], candidates: Mapping[str, str | Path]) -> None:
-    """The chosen tables (copied from ``candidates``' folders) and choice.csv into ``out``, through a
-    temporary folder beside it."""
+def polish_for_pixels(mixture, starts: Mapping[str, object], tr: transfer.Transfer, pixels: np.ndarray, spp: int,
+                      what: str, say: Callable[[str], None] = lambda m: None) -> dict:
+    """Each of ``starts`` polished for the transfer's ``pixels`` at ``spp`` by the ``pixels``
+    objective (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6), named
+    "polished NAME", a pixel modelled as lit by the table's ``mixture`` along the whole
+    transfer's paths: the objective takes one spectrum, so the kinds' own paths (which the
+    prediction that chooses among them models) are left out of the search. A start the health
+    rule refuses is left out (said)."""
+    from wavelength_pdf.evaluation.choose import POLISHED
+    from wavelength_pdf.optimize import optimize_for_pixels
+
+    out = {}
+    for name, table in starts.items():
+        say(f"choose-guiding: {what}, polishing {name} for its pixels at {spp} spp")
+        try:
+            out[f"{POLISHED} {name}"] = optimize_for_pixels(
+                mixture, table, tr.t[pixels], tr.centres, spp, incoherence=tr.incoherence[pixels],
+                terminated=tr.terminated[pixels]).table
+        except ValueError as e:
+            say(f"choose-guiding: {what}: {name} not polished: {e}")
+    return out
+
+
+def write_choice(out: Path, choices: list[MixtureChoice], chosen: Mapping[int, object]) -> None:
+    """The chosen tables (``chosen``: table index -> a candidate's file, copied byte for byte, or
+    a polished Table) and choice.csv into ``out``, through a temporary folder beside it."""
+    from wavelength_pdf.table import write_table
+
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
@@ -315,8 +360,12 @@ def write_choice(out: Path, choices: list[MixtureChoice], candidates: Mapping[st
                 w.writerow([c.table, c.mixture, c.pixels, c.chosen,
                             *(f"{c.predicted[n]:.6g}" if n in c.predicted else "" for n in names)])
         for c in choices:
-            if c.chosen != EMISSION:
-                shutil.copyfile(Path(candidates[c.chosen]) / f"{c.mixture}.csv", tmp / f"{c.mixture}.csv")
+            if c.chosen == EMISSION:
+                continue
+            if isinstance(chosen[c.table], (str, Path)):
+                shutil.copyfile(chosen[c.table], tmp / f"{c.mixture}.csv")
+            else:
+                write_table(tmp / f"{c.mixture}.csv", chosen[c.table])
         if out.exists():
             shutil.rmtree(out)
         tmp.rename(out)

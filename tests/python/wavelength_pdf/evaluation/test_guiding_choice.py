@@ -199,7 +199,7 @@ def test_the_renderer_takes_the_choice(setup, pbrt, tmp_path):
     forced = [G.MixtureChoice(c.table, c.mixture, c.pixels, c.predicted, "xyz" if c.table == 0 else G.EMISSION)
               for c in choices]
     out = tmp_path / "forced"
-    G.write_choice(out, forced, folders)
+    G.write_choice(out, forced, {0: folders["xyz"] / f"{forced[0].mixture}.csv"})
     image = tmp_path / "chosen.exr"
     r = subprocess.run([str(pbrt), *SETTINGS, "--wavelength-guiding-tables", str(out), "--outfile", str(image),
                         str(scene)], capture_output=True, text=True, timeout=300)
@@ -256,3 +256,64 @@ def test_bad_inputs_are_refused_before_any_render(setup, tmp_path, capsys):
         G.read_tiles(bad)
     assert main(["choose-guiding", str(scene), str(bare), str(folders["xyz"]), "-o", str(tmp_path / "o5")]) == 2
     assert "no tiles.txt" in capsys.readouterr().err
+    assert main(["choose-guiding", str(scene), str(spectra), "-o", str(tmp_path / "o6")]) == 2
+    assert "nothing to choose from" in capsys.readouterr().err
+    assert main(["choose-guiding", str(scene), str(spectra), "--polish", "--pixel-sampler", "independent",
+                 "-o", str(tmp_path / "o7")]) == 2
+    assert "low-discrepancy" in capsys.readouterr().err
+    assert not work.exists() and not (tmp_path / "o6").exists() and not (tmp_path / "o7").exists()
+
+
+
+def test_the_polish_adds_tables_no_worse_than_their_starts(setup, pbrt, tmp_path):
+    """choose-guiding --polish: each table's emission table (and each folder's, none here: the
+    polish needs no optimizer run), polished for its pixels and named "polished NAME", joins the
+    candidates; a chosen polished table is written as polished and, read back and mixed as the
+    renderer mixes it, is what was predicted. A polish is no worse than its start by the search's
+    own measure (the table's mixture along the whole transfer, no defensive share), keeps its
+    start's grid and is a density. (Two guiding tables, so that the suite polishes two.)"""
+    from wavelength_pdf import predict as P
+    from wavelength_pdf.evaluation.choose import wavelength_error
+
+    scene, _, folders, _, _, tmp = setup
+    spectra = tmp_path / "spectra"
+    r = subprocess.run([str(pbrt), *SETTINGS, "--guiding-tables", "2", "--wavelength-guiding-spectra", str(spectra),
+                        str(scene)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    out = tmp_path / "polished"
+    choices = G.choose_guiding_tables(scene, spectra, {}, 16, out, tmp / "work", margin=0.0, resolution=0.5,
+                                      pbrt=pbrt, transfer_spp=128, polish=True)
+    assert len(choices) == 2
+    tr = transfer.of_file(scene, tmp / "work", 0.5, pbrt, 128)  # the choice's renders, kept
+    basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
+    of_pixel = G.read_tiles(spectra / "tiles.txt").table_of(tr.mask.shape)[tr.mask]
+    lam, phi, S = G.read_defensive(spectra / "defensive.txt")
+    kind_spectra, kind_lights = G.read_kinds(spectra / "kinds.txt")
+    kinds = transfer.kind_transfers(scene, tmp / "work", kind_lights, tr, 0.5, pbrt, 128)
+    for c in choices:
+        assert set(c.predicted) == {G.EMISSION, "polished emission"}, c
+        assert c.chosen == min(c.predicted, key=lambda n: (c.predicted[n], n != G.EMISSION))
+        assert sorted(p.name for p in out.iterdir()) == sorted(
+            [G.CHOICE, *(f"{c.mixture}.csv" for c in choices if c.chosen != G.EMISSION)])
+        if c.chosen != G.EMISSION:
+            mixed = G.with_defensive(read_table(out / f"{c.mixture}.csv"), lam, phi, S)
+            again = wavelength_error(mixed, kind_spectra, basis, tr, 16, "sobol",
+                                     of_pixel == c.table if c.pixels else slice(None), kinds)
+            assert again == pytest.approx(c.predicted[c.chosen], rel=1e-6)
+    c = max(choices, key=lambda c: c.pixels)
+    sel = of_pixel == c.table
+    mixture = read_spd(spectra / f"{c.mixture}.spd", transfer.LO, transfer.HI)
+    start = stratified.stratified_table(mixture, "xyz", transfer.LO, transfer.HI)
+    polished = G.polish_for_pixels(mixture, {"xyz": start}, tr, sel, 16, "a table")["polished xyz"]
+    np.testing.assert_array_equal(polished.grid, start.grid)
+    np.testing.assert_allclose(np.trapezoid(np.asarray(polished.pdfs), polished.grid, axis=1), 1.0, rtol=1e-9)
+    assert (wavelength_error(polished, mixture, basis, tr, 16, "sobol", sel)
+            <= wavelength_error(start, mixture, basis, tr, 16, "sobol", sel) * (1 + 1e-9))
+    with pytest.raises(ValueError, match="low-discrepancy"):
+        G.choose_guiding_tables(scene, spectra, folders, 16, tmp_path / "o", tmp / "work", polish=True,
+                                pixel_sampler="independent")
+    with pytest.raises(ValueError, match="polished NAME"):
+        G.choose_guiding_tables(scene, spectra, {"polished xyz": folders["xyz"]}, 16, tmp_path / "o", tmp / "work",
+                                polish=True)
+    with pytest.raises(ValueError, match="nothing to choose"):
+        G.choose_guiding_tables(scene, spectra, {}, 16, tmp_path / "o", tmp / "work")
