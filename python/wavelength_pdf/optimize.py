@@ -199,6 +199,87 @@ def _judged(problem, start: Start, run, grid: np.ndarray, t0: float, **record) -
     return result
 
 
+def kinds_basis(spectra: list, hats, grid: np.ndarray):
+    """One lamp and one set of surfaces standing for pixels lit by several kinds of light, each
+    along its own paths (design §4.6), so that one problem of :func:`make_problem` (which takes
+    one spectrum) scores them: the lamp is the kinds' sum m = sum_j E_j and surface (j, b) is
+    φ_b E_j / m (0 where m is), so that under m it returns E_j φ_b, kind j's light on hat
+    function b, at every node of the kinds and the hats. Returns (lamp, surfaces, their indices
+    j B + b among the kinds' stacked hats (those each kind lights), the factors on a pixel's
+    stacked coefficients t_pjb that keep its colour: a problem's colours are relative to its own
+    lamp's white, kind j's in the prediction to E_j's)."""
+    from .predict import lit_basis
+    from .reflectances import ReflectanceSet
+    from .spectra import Spectrum
+
+    from .colorimetry import cmfs
+
+    lo, hi = float(grid[0]), float(grid[-1])
+    B = len(hats.labels)
+    hw = np.asarray(hats.wavelengths, dtype=np.float64)
+    # Every node a kind's own problem would have (the CMFs', the grid's, the hats'), so that the
+    # products E_j φ_b are taken at the same nodes as in the prediction, not interpolated.
+    cw = cmfs()[0]
+    nodes = [hw[(hw >= lo) & (hw <= hi)], cw[(cw >= lo) & (cw <= hi)], np.asarray(grid, dtype=np.float64)]
+    for sp in spectra:
+        w = np.asarray(sp.wavelengths, dtype=np.float64)
+        nodes.append(w[(w > lo) & (w < hi)])
+    nodes = np.unique(np.concatenate(nodes))
+    E = np.stack([np.interp(nodes, sp.wavelengths, sp.values, left=0.0, right=0.0) for sp in spectra])
+    m = E.sum(axis=0)
+    share = np.divide(E, m, out=np.zeros_like(E), where=m > 0)
+    phi = np.stack([np.interp(nodes, hw, v) for v in np.asarray(hats.values, dtype=np.float64)])
+    values, labels, index, scale = [], [], [], []
+    for j, sp in enumerate(spectra):
+        lit, sub = lit_basis(sp, hats, lo, hi)
+        own = make_problem(sp, grid, sub).c  # kind j's colours, relative to E_j's white
+        values += [phi[b] * share[j] for b in lit]
+        labels += [f"kind {j} {hats.labels[b]}" for b in lit]
+        index += [j * B + b for b in lit]
+        scale.append(own[:, 1])
+    lamp = Spectrum("kinds", f"the sum of {len(spectra)} kinds of light", nodes, m)
+    surfaces = ReflectanceSet("kinds", "hat functions under each kind of light", nodes, np.asarray(values),
+                              tuple(labels), np.full(len(values), 1.0 / len(values)))
+    summed = make_problem(lamp, grid, surfaces).c[:, 1]
+    return lamp, surfaces, np.asarray(index), np.concatenate(scale) / summed
+
+
+@float64
+def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarray, spp: int, *,
+                   incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
+                   spread: np.ndarray | None = None) -> tuple[Problem, Spectrum]:
+    """The ``pixels`` objective's problem (design §4.6) on the table ``grid`` for the pixels of
+    :func:`optimize_for_pixels` (its arguments), and the lamp it is built on: ``spectrum``, or
+    for several kinds of light their sum (:func:`kinds_basis`)."""
+    from .predict import hat_basis, lit_basis, pixel_weights
+
+    grid = np.asarray(grid, dtype=np.float64)
+    centres = np.asarray(centres, dtype=np.float64)
+    t = np.atleast_2d(np.asarray(t, dtype=np.float64))
+    spectra = list(spectrum) if isinstance(spectrum, (list, tuple)) else [spectrum]
+    if t.shape[1] != len(spectra) * centres.size:
+        raise ValueError(f"t has {t.shape[1]} coefficients per pixel, the basis {centres.size} centres"
+                         + (f" for each of {len(spectra)} kinds of light" if len(spectra) > 1 else ""))
+    hats = hat_basis(centres, float(grid[0]), float(grid[-1]))
+    if len(spectra) == 1:
+        spectrum = spectra[0]
+        lit, basis = lit_basis(spectrum, hats, float(grid[0]), float(grid[-1]))
+    else:
+        if spread is not None:
+            raise ValueError("a pixel's spread is measured for one kind of light, not several")
+        spectrum, basis, lit, factor = kinds_basis(spectra, hats, grid)
+        t = t * np.bincount(lit, weights=factor, minlength=t.shape[1])  # the unlit columns are left out below
+    problem = make_problem(spectrum, grid, basis)
+    if spread is not None:
+        spread = np.asarray(spread, dtype=np.float64)
+        if spread.shape != (t.shape[0], centres.size, centres.size):
+            raise ValueError(f"spread must be ({t.shape[0]}, {centres.size}, {centres.size}), not {spread.shape}")
+        spread = spread[:, lit][:, :, lit]
+    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated, spread)
+    problem = with_objective(problem, "pixels", spp, W)
+    return problem, spectrum
+
+
 @float64
 def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres: np.ndarray, spp: int, *,
                         incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
@@ -210,7 +291,11 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     spectral transfers are ``t`` (P, B) at the hat basis' ``centres``
     (:mod:`wavelength_pdf.evaluation.transfer`, in the image's units), with their
     ``incoherence`` and dispersed share ``terminated`` (:func:`wavelength_pdf.predict.pixel_de2`),
-    or their ``spread`` (P, B, B) in place of the incoherence.
+    or their ``spread`` (P, B, B) in place of the incoherence. ``spectrum`` may be a list of J
+    kinds of light, ``t`` then (P, J B) each pixel's transfers along each kind's own paths side
+    by side (:func:`wavelength_pdf.evaluation.transfer.kind_transfers`, as
+    :func:`~wavelength_pdf.evaluation.choose.wavelength_error` takes them; :func:`kinds_basis`),
+    without a spread.
 
     The search is :func:`wavelength_pdf.solvers.refine`'s polish of the given table, at most
     ``max_evaluations``, and it is never worse than the given table by this objective: that
@@ -221,26 +306,14 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     initialization's. The result's J figures are sqrt(N V), V the predicted mean de2
     (:func:`wavelength_pdf.evaluation.choose.wavelength_error`).
     """
-    from .predict import hat_basis, lit_basis, pixel_weights
     from .solvers import SolverResult
 
     check_objective("pixels", spp)
     t0 = time.monotonic()
     enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
-    centres = np.asarray(centres, dtype=np.float64)
-    t = np.atleast_2d(np.asarray(t, dtype=np.float64))
-    if t.shape[1] != centres.size:
-        raise ValueError(f"t has {t.shape[1]} coefficients per pixel, the basis {centres.size} centres")
-    lit, basis = lit_basis(spectrum, hat_basis(centres, float(grid[0]), float(grid[-1])), float(grid[0]), float(grid[-1]))
-    problem = make_problem(spectrum, grid, basis)
-    if spread is not None:
-        spread = np.asarray(spread, dtype=np.float64)
-        if spread.shape != (t.shape[0], centres.size, centres.size):
-            raise ValueError(f"spread must be ({t.shape[0]}, {centres.size}, {centres.size}), not {spread.shape}")
-        spread = spread[:, lit][:, :, lit]
-    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated, spread)
-    problem = with_objective(problem, "pixels", spp, W)
+    problem, spectrum = pixels_problem(spectrum, grid, t, centres, spp, incoherence=incoherence,
+                                       terminated=terminated, spread=spread)
     P_from = normalize_density(grid, table.pdfs)
     given = health_mod.health(problem, P_from)
     if not given.accepted():
@@ -255,7 +328,7 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     with single_threaded_blas():
         run = refine(start, found, Budget.starting(max_evaluations, None, t0), progress=progress)
     return _judged(problem, initial, run, grid, t0, name=getattr(spectrum, "name", ""),
-                   source=f"{getattr(spectrum, 'source', '')}; pixels: {t.shape[0]} of a scene", solver="polish",
+                   source=f"{getattr(spectrum, 'source', '')}; pixels: {len(t)} of a scene", solver="polish",
                    seed=0, objective=objective_label("pixels", spp))
 
 

@@ -27,6 +27,9 @@ is applied per guiding table:
   table k's pixels of :func:`wavelength_pdf.predict.pixel_de2`. (Without the defensive share
   the prediction misjudged the night street's LED-lit table: the optimized table's thin tails
   are what the share fills in.)
+- with ``polish``, each mixture's emission table and each folder's table, polished for that
+  table's pixels by the same prediction as an objective (:func:`polish_for_pixels`), are
+  candidates too; no folder is needed then (no optimizer run);
 - the optimized candidate with the least prediction wins if it is below (1 − ``margin``) times
   the emission table's; otherwise the emission table stays. The margin (default 0.1) is there
   because the model is an approximation: in the benchmark's window room, tables predicted
@@ -222,6 +225,7 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
                           spp: int, out: str | Path, workdir: str | Path, *,
                           margin: float = 0.1, pixel_sampler: str = "sobol", resolution: float = 0.5,
                           pbrt: Path | None = None, transfer_spp: int = transfer.SPP, polish: bool = False,
+                          polish_evaluations: int | None = None,
                           say: Callable[[str], None] = lambda m: None) -> list[MixtureChoice]:
     """Choose each guiding table's table among its emission table and ``candidates`` (name ->
     folder of ``mixture-HASH.csv``, as ``wavelength-pdf batch`` writes), write the chosen
@@ -229,7 +233,8 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     and return the choices. Every input is read and checked before the renders.
 
     ``polish``: also each mixture's emission table and each candidate's table polished for the
-    pixels of its guiding table (:func:`polish_for_pixels`), named "polished NAME"; a chosen one
+    pixels of its guiding table (:func:`polish_for_pixels`, each at most ``polish_evaluations``
+    evaluations, None: its default), named "polished NAME"; a chosen one
     is written as it was polished, and the renderer mixes the defensive share into it as into
     any table it reads."""
     from wavelength_pdf import predict as P
@@ -303,7 +308,9 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         pixels = of_pixel == k
         sel = pixels if pixels.any() else np.ones_like(pixels)
         if polish:
-            for name, table in polish_for_pixels(lamps[k], given[k], tr, sel, spp, f"table {k} ({mix})", say).items():
+            for name, table in polish_for_pixels(lamps[k] if kinds is None else kind_spectra, given[k], tr, sel, spp,
+                                                 f"table {k} ({mix})", say, kinds, mixed=tables[k],
+                                                 max_evaluations=polish_evaluations).items():
                 given[k][name] = table
                 tables[k][name] = with_defensive(table, lam, phi, S)
         predicted = {}
@@ -319,26 +326,35 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     return choices
 
 
-def polish_for_pixels(mixture, starts: Mapping[str, object], tr: transfer.Transfer, pixels: np.ndarray, spp: int,
-                      what: str, say: Callable[[str], None] = lambda m: None) -> dict:
+def polish_for_pixels(light, starts: Mapping[str, object], tr: transfer.Transfer, pixels: np.ndarray, spp: int,
+                      what: str, say: Callable[[str], None] = lambda m: None, kinds: np.ndarray | None = None,
+                      mixed: Mapping[str, object] | None = None, max_evaluations: int | None = None) -> dict:
     """Each of ``starts`` polished for the transfer's ``pixels`` at ``spp`` by the ``pixels``
     objective (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6), named
-    "polished NAME", a pixel modelled as lit by the table's ``mixture`` along the whole
-    transfer's paths: the objective takes one spectrum, so the kinds' own paths (which the
-    prediction that chooses among them models) are left out of the search. A start the health
-    rule refuses is left out (said)."""
+    "polished NAME". ``light`` is the table's mixture, each pixel lit by it along the whole
+    transfer's paths, or with ``kinds`` (J, P, B: :func:`.transfer.kind_transfers`) the list of
+    the J kinds' spectra, each pixel lit by every kind along that kind's own paths, as the
+    prediction models it. A start the health rule refuses (a table of a mixture without one of
+    the kinds cannot sample that kind's light) is polished as ``mixed`` holds it (the renderer's
+    defensive share in), else left out (said). ``max_evaluations``: each polish's budget (None:
+    :func:`~wavelength_pdf.optimize.optimize_for_pixels`'s own)."""
     from wavelength_pdf.evaluation.choose import POLISHED
     from wavelength_pdf.optimize import optimize_for_pixels
 
+    t = tr.t[pixels] if kinds is None else np.concatenate(list(np.asarray(kinds)[:, pixels]), axis=1)
     out = {}
     for name, table in starts.items():
         say(f"choose-guiding: {what}, polishing {name} for its pixels at {spp} spp")
-        try:
-            out[f"{POLISHED} {name}"] = optimize_for_pixels(
-                mixture, table, tr.t[pixels], tr.centres, spp, incoherence=tr.incoherence[pixels],
-                terminated=tr.terminated[pixels]).table
-        except ValueError as e:
-            say(f"choose-guiding: {what}: {name} not polished: {e}")
+        as_sampled = (mixed or {}).get(name)
+        for start in [table] + ([as_sampled] if as_sampled is not None and as_sampled is not table else []):
+            try:
+                budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
+                out[f"{POLISHED} {name}"] = optimize_for_pixels(
+                    light, start, t, tr.centres, spp, incoherence=tr.incoherence[pixels],
+                    terminated=tr.terminated[pixels], **budget).table
+                break
+            except ValueError as e:
+                say(f"choose-guiding: {what}: {name} not polished{' as sampled' if start is not table else ''}: {e}")
     return out
 
 

@@ -2,7 +2,8 @@
 
 - its value is the tabulated pixel prediction (``choose.wavelength_error``: the mean over the
   pixels of ``predict.pixel_de2``, with incoherence and dispersion, or with each pixel's
-  spread) computed by the objective's own quadrature, for an emission table and an optimized one;
+  spread) computed by the objective's own quadrature, for an emission table and an optimized one,
+  and for pixels lit by two kinds of light along their own paths;
 - its gradient agrees with finite differences;
 - ``xyz_metrics`` is ``lab_quadratic``'s measure as a matrix;
 - ``optimize_for_pixels`` never returns a table predicted worse than the one it started from,
@@ -19,7 +20,7 @@ import pytest
 from wavelength_pdf import objective, predict as P, stratified
 from wavelength_pdf.evaluation import transfer
 from wavelength_pdf.evaluation.choose import wavelength_error
-from wavelength_pdf.optimize import optimize_for_pixels
+from wavelength_pdf.optimize import optimize_for_pixels, pixels_problem
 from wavelength_pdf.precision import float64
 from wavelength_pdf.problem import make_problem, with_objective
 from wavelength_pdf.spectra import load_spectrum
@@ -46,14 +47,10 @@ def scene():
 
 
 @float64
-def _pixels_value(table, spectrum, tr, spp):
-    """The objective's V = value^2 / N for ``table``."""
-    grid = np.asarray(table.grid, dtype=np.float64)
-    lit, basis = P.lit_basis(spectrum, P.hat_basis(tr.centres, grid[0], grid[-1]), grid[0], grid[-1])
-    problem = make_problem(spectrum, grid, basis)
-    spread = None if tr.spread is None else tr.spread[:, lit][:, :, lit]
-    W = P.pixel_weights(problem.c, tr.t[:, lit], spp, tr.incoherence, tr.terminated, spread)
-    problem = with_objective(problem, "pixels", spp, W)
+def _pixels_value(table, spectrum, tr, spp, t=None):
+    """The objective's V = value^2 / N for ``table`` (``t``: the kinds' transfers side by side)."""
+    problem, _ = pixels_problem(spectrum, table.grid, tr.t if t is None else t, tr.centres, spp,
+                                incoherence=tr.incoherence, terminated=tr.terminated, spread=tr.spread)
     return problem, objective.J(problem, table.pdfs) ** 2 / spp
 
 
@@ -77,6 +74,21 @@ def test_value_is_the_tabulated_pixel_prediction(fl2, scene, spp, spread):
         _, got = _pixels_value(table, fl2, scene, spp)
         # Quadrature against a 2^15-point tabulation of C(u), and CIEDE2000's form as a matrix
         # against its value along the covariance's axes: both agree far below any ranking's needs.
+        assert got == pytest.approx(want, rel=2e-3)
+
+
+def test_value_for_several_kinds_of_light_is_their_prediction(fl2, scene, spp=64):
+    """Pixels lit by a fluorescent and a sodium lamp, each along its own paths (the kinds'
+    transfers side by side): the objective, built on one lamp (the kinds' sum) and one surface
+    per kind and hat, has the value of the prediction that stacks the kinds' bases (as
+    choose-guiding predicts a guiding table's pixels)."""
+    sodium = load_spectrum("cie:HP1", LO, HI)  # high-pressure sodium
+    rng = np.random.default_rng(5)
+    kinds = np.stack([scene.t * rng.uniform(0, 1, size=(40, 1)), scene.t[::-1] * rng.uniform(0, 2, size=(40, 1))])
+    basis = P.hat_basis(CENTRES, LO, HI)
+    for table in (stratified.stratified_table(fl2, "spd", LO, HI), stratified.uniform_table(LO, HI)):
+        want = wavelength_error(table, [fl2, sodium], basis, scene, spp, kinds=kinds)
+        _, got = _pixels_value(table, [fl2, sodium], scene, spp, t=np.concatenate(list(kinds), axis=1))
         assert got == pytest.approx(want, rel=2e-3)
 
 
