@@ -117,7 +117,7 @@ def pictures(where: Path, name: str, mean: np.ndarray, maps: dict, index: np.nda
     import matplotlib.pyplot as plt
 
     shown = [s for s in ("visible", "emission", "guided", "guided-optimized", "guided-chosen", "guided-polished",
-                                 "floor") if s in maps]
+                         "floor") if s in maps]
     first = {s: maps[s][0] for s in shown}
     top = float(np.percentile(np.concatenate([m[mask] for m in first.values()]), 99))
     fig, axes = plt.subplots(1, 2 + len(shown), figsize=(3.2 * (2 + len(shown)), 3.0), constrained_layout=True)
@@ -189,8 +189,9 @@ def main() -> int:
                     "for (wavelength-pdf batch --reflectances): white (default), colorchecker, scene (the "
                     "scene's own materials) or a reflectance CSV")
     ap.add_argument("--choose-from", nargs="+", default=["white", "scene"], metavar="COLOURS",
-                    help="guided-chosen and guided-polished: the optimized routes (as --colours) that wavelength-pdf choose-guiding "
-                         "chooses from, table by table, beside the emission tables (default: white scene)")
+                    help="guided-chosen and guided-polished: the optimized routes (as --colours) that "
+                         "wavelength-pdf choose-guiding chooses from, table by table, beside the emission tables "
+                         "(default: white scene)")
     ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
     ap.add_argument("--per-table", type=Path, metavar="CSV",
                     help="write each sampler's de2 over each guiding table's pixels here")

@@ -204,15 +204,14 @@ def kinds_basis(spectra: list, hats, grid: np.ndarray):
     along its own paths (design §4.6), so that one problem of :func:`make_problem` (which takes
     one spectrum) scores them: the lamp is the kinds' sum m = sum_j E_j and surface (j, b) is
     φ_b E_j / m (0 where m is), so that under m it returns E_j φ_b, kind j's light on hat
-    function b, at every node of the kinds and the hats. Returns (lamp, surfaces, their indices
+    function b, at every node of the kinds, the hats, the CMFs and the grid. Returns (lamp, surfaces, their indices
     j B + b among the kinds' stacked hats (those each kind lights), the factors on a pixel's
     stacked coefficients t_pjb that keep its colour: a problem's colours are relative to its own
     lamp's white, kind j's in the prediction to E_j's)."""
+    from .colorimetry import cmfs
     from .predict import lit_basis
     from .reflectances import ReflectanceSet
     from .spectra import Spectrum
-
-    from .colorimetry import cmfs
 
     lo, hi = float(grid[0]), float(grid[-1])
     B = len(hats.labels)
@@ -328,8 +327,8 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     with single_threaded_blas():
         run = refine(start, found, Budget.starting(max_evaluations, None, t0), progress=progress)
     return _judged(problem, initial, run, grid, t0, name=getattr(spectrum, "name", ""),
-                   source=f"{getattr(spectrum, 'source', '')}; pixels: {len(t)} of a scene", solver="polish",
-                   seed=0, objective=objective_label("pixels", spp))
+                   source=f"{getattr(spectrum, 'source', '')}; pixels: {np.atleast_2d(t).shape[0]} of a scene",
+                   solver="polish", seed=0, objective=objective_label("pixels", spp))
 
 
 @float64

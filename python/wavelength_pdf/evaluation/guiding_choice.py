@@ -234,9 +234,8 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
 
     ``polish``: also each mixture's emission table and each candidate's table polished for the
     pixels of its guiding table (:func:`polish_for_pixels`, each at most ``polish_evaluations``
-    evaluations, None: its default), named "polished NAME"; a chosen one
-    is written as it was polished, and the renderer mixes the defensive share into it as into
-    any table it reads."""
+    evaluations, None: its default), named "polished NAME"; a chosen one is written as it was
+    polished, and the renderer mixes the defensive share into it as into any table it reads."""
     from wavelength_pdf import predict as P
     from wavelength_pdf.evaluation.choose import POLISHED, check_spp, wavelength_error
     from wavelength_pdf.spectra import read_spd
@@ -342,13 +341,13 @@ def polish_for_pixels(light, starts: Mapping[str, object], tr: transfer.Transfer
     from wavelength_pdf.optimize import optimize_for_pixels
 
     t = tr.t[pixels] if kinds is None else np.concatenate(list(np.asarray(kinds)[:, pixels]), axis=1)
+    budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
     out = {}
     for name, table in starts.items():
         say(f"choose-guiding: {what}, polishing {name} for its pixels at {spp} spp")
         as_sampled = (mixed or {}).get(name)
         for start in [table] + ([as_sampled] if as_sampled is not None and as_sampled is not table else []):
             try:
-                budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
                 out[f"{POLISHED} {name}"] = optimize_for_pixels(
                     light, start, t, tr.centres, spp, incoherence=tr.incoherence[pixels],
                     terminated=tr.terminated[pixels], **budget).table
