@@ -204,10 +204,11 @@ def kinds_basis(spectra: list, hats, grid: np.ndarray):
     along its own paths (design §4.6), so that one problem of :func:`make_problem` (which takes
     one spectrum) scores them: the lamp is the kinds' sum m = sum_j E_j and surface (j, b) is
     φ_b E_j / m (0 where m is), so that under m it returns E_j φ_b, kind j's light on hat
-    function b, at every node of the kinds, the hats, the CMFs and the grid. Returns (lamp, surfaces, their indices
-    j B + b among the kinds' stacked hats (those each kind lights), the factors on a pixel's
-    stacked coefficients t_pjb that keep its colour: a problem's colours are relative to its own
-    lamp's white, kind j's in the prediction to E_j's)."""
+    function b, at every node of the kinds, the hats, the CMFs and the grid. Returns (lamp,
+    surfaces, their indices j B + b among the kinds' stacked hats (those each kind lights), each
+    surface's luminance under its own kind relative to E_j's white, as the prediction has it: a
+    problem's colours are relative to its own lamp's white, so a pixel's t_pjb is scaled by this
+    over the problem's)."""
     from .colorimetry import cmfs
     from .predict import lit_basis
     from .reflectances import ReflectanceSet
@@ -228,19 +229,18 @@ def kinds_basis(spectra: list, hats, grid: np.ndarray):
     m = E.sum(axis=0)
     share = np.divide(E, m, out=np.zeros_like(E), where=m > 0)
     phi = np.stack([np.interp(nodes, hw, v) for v in np.asarray(hats.values, dtype=np.float64)])
-    values, labels, index, scale = [], [], [], []
+    values, labels, index, own_y = [], [], [], []
     for j, sp in enumerate(spectra):
         lit, sub = lit_basis(sp, hats, lo, hi)
         own = make_problem(sp, grid, sub).c  # kind j's colours, relative to E_j's white
         values += [phi[b] * share[j] for b in lit]
         labels += [f"kind {j} {hats.labels[b]}" for b in lit]
         index += [j * B + b for b in lit]
-        scale.append(own[:, 1])
+        own_y.append(own[:, 1])
     lamp = Spectrum("kinds", f"the sum of {len(spectra)} kinds of light", nodes, m)
     surfaces = ReflectanceSet("kinds", "hat functions under each kind of light", nodes, np.asarray(values),
                               tuple(labels), np.full(len(values), 1.0 / len(values)))
-    summed = make_problem(lamp, grid, surfaces).c[:, 1]
-    return lamp, surfaces, np.asarray(index), np.concatenate(scale) / summed
+    return lamp, surfaces, np.asarray(index), np.concatenate(own_y)
 
 
 @float64
@@ -266,9 +266,10 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
     else:
         if spread is not None:
             raise ValueError("a pixel's spread is measured for one kind of light, not several")
-        spectrum, basis, lit, factor = kinds_basis(spectra, hats, grid)
-        t = t * np.bincount(lit, weights=factor, minlength=t.shape[1])  # the unlit columns are left out below
+        spectrum, basis, lit, own_y = kinds_basis(spectra, hats, grid)
     problem = make_problem(spectrum, grid, basis)
+    if len(spectra) > 1:  # each kind's colours as the prediction's (the unlit columns are left out below)
+        t = t * np.bincount(lit, weights=own_y / np.asarray(problem.c)[:, 1], minlength=t.shape[1])
     if spread is not None:
         spread = np.asarray(spread, dtype=np.float64)
         if spread.shape != (t.shape[0], centres.size, centres.size):
