@@ -90,28 +90,41 @@ POLISHED = "polished"
 
 
 def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object],
-                    say: Callable[[str], None] = lambda m: None) -> dict[str, object]:
-    """Each of ``tables`` polished for ``tr``'s pixels at ``spp`` by the ``pixels`` objective
-    (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6: the low-discrepancy
-    pixel sampler's strata, with ``tr``'s spread where it has one), named "polished NAME".
+                    say: Callable[[str], None] = lambda m: None, *, pixels: np.ndarray | slice = slice(None),
+                    kinds: np.ndarray | None = None, as_sampled: Mapping[str, object] | None = None,
+                    max_evaluations: int | None = None, what: str = "the scene's pixels") -> dict[str, object]:
+    """Each of ``tables`` polished for ``tr``'s pixels (those ``pixels`` selects) at ``spp`` by
+    the ``pixels`` objective (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6:
+    the low-discrepancy pixel sampler's strata, with ``tr``'s spread where it has one), named
+    "polished NAME". ``spectrum`` may be a list of kinds of light with ``kinds`` (J, P, B) their
+    transfers, each pixel lit by every kind along its own paths (as :func:`wavelength_error`;
+    no spread then). ``max_evaluations``: each polish's budget (None: its default).
 
     A polish never comes out worse than its table by the objective, but which table it starts
     from matters: it is a local search, and the lamp's emission table and J's table sit in
     different basins (docs/benchmark.md, "A pixel's spread": from the emission table it wins
     under FL7 and LED-B4, J's table stays better under FL11 and high-pressure sodium), so the
-    caller predicts every polish and keeps the best."""
+    caller predicts every polish and keeps the best. A table the health rule refuses (biased, or
+    of infinite variance: a lamp dark over part of the range) is polished as ``as_sampled``
+    holds it where it has one (guiding's table with the renderer's defensive share in), else not
+    polished (said); it is still predicted as given."""
     from wavelength_pdf.optimize import optimize_for_pixels
 
+    t = tr.t[pixels] if kinds is None else np.concatenate(list(np.asarray(kinds)[:, pixels]), axis=1)
+    spread = None if tr.spread is None or kinds is not None else tr.spread[pixels]
+    budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
     out = {}
     for name, table in tables.items():
-        say(f"choose: polishing {name} for the scene's pixels at {spp} spp")
-        try:
-            out[f"{POLISHED} {name}"] = optimize_for_pixels(spectrum, table, tr.t, tr.centres, spp,
-                                                            incoherence=tr.incoherence, terminated=tr.terminated,
-                                                            spread=tr.spread).table
-        except ValueError as e:  # one the health rule refuses (biased, or of infinite variance: a
-            # lamp dark over part of the range) is not polished; it is still predicted as given
-            say(f"choose: {name} not polished: {e}")
+        say(f"choose: polishing {name} for {what} at {spp} spp")
+        sampled = (as_sampled or {}).get(name)
+        for start in [table] + ([sampled] if sampled is not None and sampled is not table else []):
+            try:
+                out[f"{POLISHED} {name}"] = optimize_for_pixels(
+                    spectrum, start, t, tr.centres, spp, incoherence=tr.incoherence[pixels],
+                    terminated=tr.terminated[pixels], spread=spread, **budget).table
+                break
+            except ValueError as e:
+                say(f"choose: {name} not polished{' as sampled' if start is not table else ''}: {e}")
     return out
 
 

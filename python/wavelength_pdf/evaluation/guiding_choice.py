@@ -28,7 +28,7 @@ is applied per guiding table:
   the prediction misjudged the night street's LED-lit table: the optimized table's thin tails
   are what the share fills in.)
 - with ``polish``, each mixture's emission table and each folder's table, polished for that
-  table's pixels by the same prediction as an objective (:func:`polish_for_pixels`), are
+  table's pixels by the same prediction as an objective (:func:`.choose.polished_tables`), are
   candidates too; no folder is needed then (no optimizer run);
 - the optimized candidate with the least prediction wins if it is below (1 − ``margin``) times
   the emission table's; otherwise the emission table stays. The margin (default 0.1) is there
@@ -233,11 +233,11 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     and return the choices. Every input is read and checked before the renders.
 
     ``polish``: also each mixture's emission table and each candidate's table polished for the
-    pixels of its guiding table (:func:`polish_for_pixels`, each at most ``polish_evaluations``
+    pixels of its guiding table (:func:`.choose.polished_tables`, each at most ``polish_evaluations``
     evaluations, None: its default), named "polished NAME"; a chosen one is written as it was
     polished, and the renderer mixes the defensive share into it as into any table it reads."""
     from wavelength_pdf import predict as P
-    from wavelength_pdf.evaluation.choose import POLISHED, check_spp, wavelength_error
+    from wavelength_pdf.evaluation.choose import POLISHED, check_spp, polished_tables, wavelength_error
     from wavelength_pdf.spectra import read_spd
     from wavelength_pdf.table import read_table
 
@@ -307,9 +307,10 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         pixels = of_pixel == k
         sel = pixels if pixels.any() else np.ones_like(pixels)
         if polish:
-            for name, table in polish_for_pixels(lamps[k] if kinds is None else kind_spectra, given[k], tr, sel, spp,
-                                                 f"table {k} ({mix})", say, kinds, mixed=tables[k],
-                                                 max_evaluations=polish_evaluations).items():
+            for name, table in polished_tables(lamps[k] if kinds is None else kind_spectra, tr, spp, given[k], say,
+                                               pixels=sel, kinds=kinds, as_sampled=tables[k],
+                                               max_evaluations=polish_evaluations,
+                                               what=f"table {k} ({mix})'s pixels").items():
                 given[k][name] = table
                 tables[k][name] = with_defensive(table, lam, phi, S)
         predicted = {}
@@ -323,38 +324,6 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     write_choice(out, choices, {c.table: Path(candidates[c.chosen]) / f"{c.mixture}.csv" if c.chosen in candidates
                                 else given[c.table][c.chosen] for c in choices if c.chosen != EMISSION})
     return choices
-
-
-def polish_for_pixels(light, starts: Mapping[str, object], tr: transfer.Transfer, pixels: np.ndarray, spp: int,
-                      what: str, say: Callable[[str], None] = lambda m: None, kinds: np.ndarray | None = None,
-                      mixed: Mapping[str, object] | None = None, max_evaluations: int | None = None) -> dict:
-    """Each of ``starts`` polished for the transfer's ``pixels`` at ``spp`` by the ``pixels``
-    objective (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6), named
-    "polished NAME". ``light`` is the table's mixture, each pixel lit by it along the whole
-    transfer's paths, or with ``kinds`` (J, P, B: :func:`.transfer.kind_transfers`) the list of
-    the J kinds' spectra, each pixel lit by every kind along that kind's own paths, as the
-    prediction models it. A start the health rule refuses (a table of a mixture without one of
-    the kinds cannot sample that kind's light) is polished as ``mixed`` holds it (the renderer's
-    defensive share in), else left out (said). ``max_evaluations``: each polish's budget (None:
-    :func:`~wavelength_pdf.optimize.optimize_for_pixels`'s own)."""
-    from wavelength_pdf.evaluation.choose import POLISHED
-    from wavelength_pdf.optimize import optimize_for_pixels
-
-    t = tr.t[pixels] if kinds is None else np.concatenate(list(np.asarray(kinds)[:, pixels]), axis=1)
-    budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
-    out = {}
-    for name, table in starts.items():
-        say(f"choose-guiding: {what}, polishing {name} for its pixels at {spp} spp")
-        as_sampled = (mixed or {}).get(name)
-        for start in [table] + ([as_sampled] if as_sampled is not None and as_sampled is not table else []):
-            try:
-                out[f"{POLISHED} {name}"] = optimize_for_pixels(
-                    light, start, t, tr.centres, spp, incoherence=tr.incoherence[pixels],
-                    terminated=tr.terminated[pixels], **budget).table
-                break
-            except ValueError as e:
-                say(f"choose-guiding: {what}: {name} not polished{' as sampled' if start is not table else ''}: {e}")
-    return out
 
 
 def write_choice(out: Path, choices: list[MixtureChoice], chosen: Mapping[int, object]) -> None:

@@ -272,7 +272,7 @@ def test_the_polish_adds_tables_no_worse_than_their_starts(setup, pbrt, tmp_path
     prediction (each pixel lit by every kind along its own paths), keeps its start's grid and is
     a density. (Two guiding tables, and short polishes, for the suite's time.)"""
     from wavelength_pdf import predict as P
-    from wavelength_pdf.evaluation.choose import wavelength_error
+    from wavelength_pdf.evaluation.choose import polished_tables, wavelength_error
 
     scene, _, folders, _, _, tmp = setup
     spectra = tmp_path / "spectra"
@@ -303,8 +303,8 @@ def test_the_polish_adds_tables_no_worse_than_their_starts(setup, pbrt, tmp_path
     sel = of_pixel == c.table
     mixture = read_spd(spectra / f"{c.mixture}.spd", transfer.LO, transfer.HI)
     start = G.with_defensive(stratified.stratified_table(mixture, "xyz", transfer.LO, transfer.HI), lam, phi, S)
-    polished = G.polish_for_pixels(kind_spectra, {"xyz": start}, tr, sel, 16, "a table", kinds=kinds,
-                                   max_evaluations=40)["polished xyz"]
+    polished = polished_tables(kind_spectra, tr, 16, {"xyz": start}, pixels=sel, kinds=kinds,
+                               max_evaluations=40)["polished xyz"]
     np.testing.assert_array_equal(polished.grid, start.grid)
     np.testing.assert_allclose(np.trapezoid(np.asarray(polished.pdfs), polished.grid, axis=1), 1.0, rtol=1e-9)
     # the search's objective is the prediction up to its quadrature (test_objective_pixels.py)
