@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -193,6 +194,8 @@ def main() -> int:
                          "wavelength-pdf choose-guiding chooses from, table by table, beside the emission tables "
                          "(default: white scene)")
     ap.add_argument("--pictures", type=Path, help="write SCENE.png (image, table map, error maps) here")
+    ap.add_argument("--keep", type=Path, metavar="DIR",
+                    help="keep every render (SCENE-SAMPLER-SEED.exr) and the tables it used here, to inspect")
     ap.add_argument("--per-table", type=Path, metavar="CSV",
                     help="write each sampler's de2 over each guiding table's pixels here")
     ap.add_argument("--scenes", nargs="+", default=list(SCENES), help="benchmark scenes (default: %(default)s)")
@@ -260,6 +263,9 @@ def main() -> int:
                         print(f"{name}: guided with {h['wavelengthGuidingTables']} tables, "
                               f"{h['wavelengthGuidingKinds']} kinds, pre-pass "
                               f"{h['wavelengthGuidingCPUSeconds']:.3f} s CPU", file=sys.stderr)
+            if a.keep:
+                shutil.copytree(tmp, a.keep / name, dirs_exist_ok=True,
+                                ignore=shutil.ignore_patterns(*(f"{n}*" for n in a.scenes if n != name)))
             # The lit pixels of the mean of every image (lamps seen directly left out, as the
             # benchmark does).
             mean = np.mean([im for ims in images.values() for im in ims], axis=0)

@@ -27,7 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import aot, objective, quadrature, sampling, uniform
+from . import aot, objective, quadrature, uniform
 from .problem import Problem
 
 #: Largest accepted relative bias of the estimator's mean (design §4).
@@ -139,7 +139,7 @@ def _mean_in_wavelength(arr: dict, P: jax.Array, glx: jax.Array, glw: jax.Array)
     lam = a[:, None] + h[:, None] * glx[None, :]
     wt = h[:, None] * glw[None, :]
     f = quadrature.f_at(arr, lam)  # (n, g, 3)
-    PN = jax.vmap(lambda p: sampling.normalize(grid, p))(P)
+    PN = objective.as_sampled(P, arr)
     pk = jax.vmap(lambda pn: jnp.interp(lam, grid, pn))(PN)  # (4, n, g)
     m = jnp.sum(pk, axis=0)
     pos = m > 0

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import aot, colorimetry, sampling
-from .problem import Problem
+from .problem import SHARE, SHARED, Problem
 from .quadrature import ORDER, ORDER_FINE, SEARCH_ORDER, gauss_legendre, normalized, table_estimate, table_quadrature
 from .second_moment import diag_second_moment, weighted_second_moment
 
@@ -125,9 +125,18 @@ def estimator_moments(arr: dict, wt: Array, C: Array, D: Array, diag_exact: Arra
     return J, m1, m2
 
 
-def _table_moments(P: Array, arr: dict, glx: Array, glw: Array):
-    u, wt, C, D = table_quadrature(P, arr, glx, glw)
+def as_sampled(P: Array, arr: dict) -> Array:
+    """The table P as it is sampled: each density normalized, and with a problem's fixed share
+    (:func:`wavelength_pdf.problem.with_share`) mixed in."""
     PN = jax.vmap(lambda p: sampling.normalize(arr["grid"], p))(P)
+    if SHARE not in arr:
+        return PN
+    return (1.0 - arr[SHARE]) * PN + arr[SHARE] * arr[SHARED]
+
+
+def _table_moments(P: Array, arr: dict, glx: Array, glw: Array):
+    P = PN = as_sampled(P, arr)
+    u, wt, C, D = table_quadrature(P, arr, glx, glw)
     msum = jnp.sum(PN, axis=0)
     dispersed = weighted_second_moment(arr, msum, arr["pixel_w1"]) if "pixel_w1" in arr else 0.0
     return estimator_moments(arr, wt, C, D, diag_second_moment(arr, msum), u, dispersed)
@@ -186,7 +195,7 @@ def estimate(problem: Problem, P, u) -> np.ndarray:
     """The estimator C(u) of the table P (4, M+1) at the u values given, shape (n, 3)."""
     P = _check_table(problem, P)
     arr = problem.arrays
-    PN, FF = normalized(arr["grid"], P)
+    PN, FF = normalized(arr["grid"], as_sampled(P, arr))
     return np.asarray(table_estimate(arr, PN, FF, jnp.atleast_1d(jnp.asarray(u))))
 
 

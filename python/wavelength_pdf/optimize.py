@@ -29,7 +29,8 @@ from .budget import Budget
 from .compile_cache import enable_compilation_cache
 from .model import DEFAULT_GRID, normalize_density
 from .precision import float64
-from .problem import DEFAULT_OBJECTIVE_SPP, Problem, check_objective, make_problem, objective_label, with_objective
+from .problem import (DEFAULT_OBJECTIVE_SPP, Problem, check_objective, make_problem, objective_label, with_objective,
+                      with_share)
 from .quadrature import ORDER_FINE
 from .result import Result
 from .solvers import DEFAULT_SOLVER, REFINE_EVALUATIONS, SOLVERS, Solver, Start, initialization_result, refine
@@ -250,7 +251,7 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
     """The ``pixels`` objective's problem (design §4.6) on the table ``grid`` for the pixels of
     :func:`optimize_for_pixels` (its arguments), and the lamp it is built on: ``spectrum``, or
     for several kinds of light their sum (:func:`kinds_basis`)."""
-    from .predict import hat_basis, lit_basis, pixel_weights
+    from .predict import hat_basis, kinds_spread, lit_basis, pixel_weights
 
     grid = np.asarray(grid, dtype=np.float64)
     centres = np.asarray(centres, dtype=np.float64)
@@ -265,12 +266,15 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
         lit, basis = lit_basis(spectrum, hats, float(grid[0]), float(grid[-1]))
     else:
         if spread is not None:
-            raise ValueError("a pixel's spread is measured for one kind of light, not several")
+            raise ValueError("a measured spread is one kind of light's; several kinds have their own (kinds_spread)")
         spectrum, basis, lit, own_y = kinds_basis(spectra, hats, grid)
     problem = make_problem(spectrum, grid, basis)
-    if len(spectra) > 1:  # each kind's colours as the prediction's (the unlit columns are left out below)
+    if len(spectra) > 1:
+        # each kind's colours as the prediction's (the unlit columns are left out below), and
+        # each sample carrying one kind's light, as the prediction has it
         t = t * np.bincount(lit, weights=own_y / np.asarray(problem.c)[:, 1], minlength=t.shape[1])
-    if spread is not None:
+        spread = kinds_spread(t[:, lit], np.asarray(problem.c)[:, 1], lit // centres.size, incoherence)
+    elif spread is not None:
         spread = np.asarray(spread, dtype=np.float64)
         if spread.shape != (t.shape[0], centres.size, centres.size):
             raise ValueError(f"spread must be ({t.shape[0]}, {centres.size}, {centres.size}), not {spread.shape}")
@@ -283,7 +287,8 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
 @float64
 def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres: np.ndarray, spp: int, *,
                         incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
-                        spread: np.ndarray | None = None, max_evaluations: int = REFINE_EVALUATIONS,
+                        spread: np.ndarray | None = None, share: tuple[float, Table] | None = None,
+                        max_evaluations: int = REFINE_EVALUATIONS,
                         progress: Callable[[int, float], None] | None = None) -> Result:
     """Polish ``table`` (e.g. the lamp's J table, or its emission table) on its own grid for
     the image a scene shows at ``spp``: the ``pixels`` objective (design §4.6), whose value
@@ -295,14 +300,19 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     kinds of light, ``t`` then (P, J B) each pixel's transfers along each kind's own paths side
     by side (:func:`wavelength_pdf.evaluation.transfer.kind_transfers`, as
     :func:`~wavelength_pdf.evaluation.choose.wavelength_error` takes them; :func:`kinds_basis`),
-    without a spread.
+    each pixel's spread then the kinds' (:func:`wavelength_pdf.predict.kinds_spread`).
+    ``share``: (S, D), the table is sampled with the share S of the four densities of table D
+    mixed into its own (a guiding table's defensive share, design §1.8), and is polished as so
+    sampled (:func:`wavelength_pdf.problem.with_share`; D is taken at the table's grid), with no
+    channel's std held (below); the result is the unmixed table.
 
     The search is :func:`wavelength_pdf.solvers.refine`'s polish of the given table, at most
     ``max_evaluations``, and it is never worse than the given table by this objective: that
     table is the result when nothing better passes the health check. The check holds each
     channel's std to the larger of the equal-mass initialization's and the given table's, so
     a table that is itself worse than the initialization in a channel (an emission table
-    of a lamp with little blue) can be polished. The record's J_init is the equal-mass
+    of a lamp with little blue) can be polished; with a ``share`` it holds no channel's std,
+    only the bias. The record's J_init is the equal-mass
     initialization's. The result's J figures are sqrt(N V), V the predicted mean de2
     (:func:`wavelength_pdf.evaluation.choose.wavelength_error`).
     """
@@ -314,14 +324,21 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     grid = np.asarray(table.grid, dtype=np.float64)
     problem, spectrum = pixels_problem(spectrum, grid, t, centres, spp, incoherence=incoherence,
                                        terminated=terminated, spread=spread)
+    if share is not None:
+        S, D = share
+        problem = with_share(problem, S, [np.interp(grid, D.grid, d, left=0.0, right=0.0) for d in D.pdfs])
     P_from = normalize_density(grid, table.pdfs)
     given = health_mod.health(problem, P_from)
     if not given.accepted():
         raise ValueError(f"the table to polish is not usable for {getattr(spectrum, 'name', 'the spectrum')}: "
                          f"{given.reason()}")
     initial = Start.of(problem, init_mod.equal_mass_partition(problem))
-    initial = dataclasses.replace(initial, health=dataclasses.replace(
-        initial.health, std=np.maximum(initial.health.std, given.std)))
+    # With a share the table's weights are bounded (every density is at least S d_k) and the
+    # objective is itself every pixel's variance, so no channel's std on the white surface is
+    # held: that guard would keep, say, a sodium-lit table's blue, which its pixels hardly
+    # show, at the cost of the colours they do (design §4.6).
+    std = np.full_like(given.std, np.inf) if share is not None else np.maximum(initial.health.std, given.std)
+    initial = dataclasses.replace(initial, health=dataclasses.replace(initial.health, std=std))
     # The search starts from, and falls back to, the given table.
     start = dataclasses.replace(initial, P=P_from, J=objective_mod.J(problem, P_from))
     found = SolverResult(P=P_from, J=start.J, health=given, message="from the given table")

@@ -438,7 +438,7 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     r = np.minimum(per_pixel("incoherence", incoherence), spp) if incoherence is not None else 0.0
     spread_cov = 0.0
     if spread is not None:
-        spread_cov = np.einsum("pbc,bicj->pij", _capped_spread(spread, t, spp),
+        spread_cov = np.einsum("pbc,bicj->pij", _capped_spread(spread, t, spp, pc.target[:, 1]),
                                basis_covariance(pc, spp, "independent"), optimize=True)
     elif incoherence is not None:
         cov = cov + r * quad(basis_covariance(pc, spp, "independent"))
@@ -460,14 +460,51 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     return de2 + np.einsum("pij,pij->p", A, (1.0 - share) ** 2 * spread_cov)
 
 
-def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int) -> np.ndarray:
-    """The spread (P, B, B), checked, each pixel's scaled down where its size relative to the
-    pixel's spectrum, tr(S) / |t|^2 (r for one spectrum), exceeds N (:func:`pixel_de2`)."""
+def kinds_spread(t: np.ndarray, y: np.ndarray, kind_of: np.ndarray,
+                 incoherence: np.ndarray | None = None) -> np.ndarray:
+    """The spread (P, B, B) of pixels lit by several kinds of light along their own paths
+    (design §6.8), ``t`` (P, B) their coefficients with column b of kind ``kind_of[b]`` and
+    luminance ``y[b]`` (t_p · y is pixel p's Y). A sample of the pixel carries the light of one
+    kind, not of their mixture: next-event estimation picks one light, and the light sampler
+    picks it in proportion to its contribution, so kind j with probability q_pj, its share of
+    the pixel's luminance. The sample's spectrum is then a t_pj / q_pj (t_pj the pixel's
+    coefficients of kind j, zero elsewhere; a its magnitude, E a = 1 and E a² = 1 + r_p), whose
+    covariance over the samples is
+
+        S_p = (1 + r_p) Σ_j t_pj t_pjᵀ / q_pj − t_p t_pᵀ,
+
+    r_p t_p t_pᵀ for one kind. The pixel's stratification of u cannot cancel what changes from
+    one sample to the next, so this, not r_p t_p t_pᵀ, is what it leaves (:func:`pixel_de2`)."""
+    t = np.atleast_2d(np.asarray(t, dtype=np.float64))
+    y = np.asarray(y, dtype=np.float64)
+    kind_of = np.asarray(kind_of)
+    Pn, B = t.shape
+    if y.shape != (B,) or kind_of.shape != (B,):
+        raise ValueError(f"y and kind_of must give each of the {B} columns its luminance and kind")
+    r = np.zeros(Pn) if incoherence is None else np.asarray(incoherence, dtype=np.float64)
+    Y = np.stack([t[:, kind_of == j] @ y[kind_of == j] for j in np.unique(kind_of)], axis=1)  # (P, J)
+    total = Y.sum(axis=1, keepdims=True)
+    q = np.divide(Y, total, out=np.zeros_like(Y), where=total > 0)
+    S = -t[:, :, None] * t[:, None, :]
+    for i, j in enumerate(np.unique(kind_of)):
+        cols = np.flatnonzero(kind_of == j)
+        blk = t[:, cols]
+        w = np.divide(1.0 + r, q[:, i], out=np.zeros(Pn), where=q[:, i] > 0)
+        S[:, cols[:, None], cols[None, :]] += w[:, None, None] * blk[:, :, None] * blk[:, None, :]
+    return S
+
+
+def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int, y: np.ndarray) -> np.ndarray:
+    """The spread (P, B, B), checked, each pixel's scaled down where the relative variance of
+    its samples' luminance, y' S y / (t · y)^2 (r for one spectrum; y the basis' luminances),
+    exceeds N (:func:`pixel_de2`). In luminance, not in the coefficients, so that the cap does
+    not depend on the basis functions' units (a kinds' problem scales each kind's)."""
     S = np.asarray(spread, dtype=np.float64)
     P, B = t.shape
     if S.shape != (P, B, B) or not np.all(np.isfinite(S)):
         raise ValueError(f"spread must be ({P}, {B}, {B}) finite values, not {S.shape}")
-    rel = np.trace(S, axis1=1, axis2=2) / np.maximum(np.einsum("pb,pb->p", t, t), 1e-300)
+    y = np.asarray(y, dtype=np.float64)
+    rel = np.einsum("b,pbc,c->p", y, S, y) / np.maximum((t @ y) ** 2, 1e-300)
     return S * np.minimum(1.0, spp / np.maximum(rel, 1e-300))[:, None, None]
 
 
@@ -571,8 +608,8 @@ def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.n
         return np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True)
 
     # The unstratified term: each pixel's spread, or its one spectrum's r t t'.
-    middle = (np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, _capped_spread(spread, t, spp), A, optimize=True)
-              if spread is not None else outer((1 - s) ** 2 * r))
+    middle = (np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, _capped_spread(spread, t, spp, target[:, 1]), A,
+                        optimize=True) if spread is not None else outer((1 - s) ** 2 * r))
     W = [outer((1 - s) ** 2), middle, outer(s ** 2 * (1 + r) / spp)]
     return np.stack([w.reshape(B * 3, B * 3) for w in W])
 

@@ -19,7 +19,8 @@ import numpy as np
 
 from . import aot, colorimetry
 from .precision import float64
-from .model import DEFAULT_GRID, check_objective_nodes, check_table_nodes, product_integrals
+from .model import (DEFAULT_GRID, check_objective_nodes, check_table_nodes, normalize_density, product_integrals,
+                    trapezoid)
 
 #: Width (nm) of the ramp that stands in for the jump of a spectrum that stops at a
 #: non-zero value inside the table range (its effect on any integral is ~1e-12 relative).
@@ -340,8 +341,35 @@ def white_of(problem: Problem) -> Problem:
     """The same lamp on the same grid and nodes without surface colours (§4.1's white
     surface), for J."""
     n = problem.n_nodes
-    return _from_nodes(problem.name, problem.source, problem.grid, problem.nodes[:n], problem.spec[:n],
-                       problem.cmf[:n])
+    white = _from_nodes(problem.name, problem.source, problem.grid, problem.nodes[:n], problem.spec[:n],
+                        problem.cmf[:n])
+    if SHARE in problem.arrays:
+        white.arrays.update({k: problem.arrays[k] for k in (SHARE, SHARED)})
+    return white
+
+
+#: The arrays of :func:`with_share`: the share S and the four densities (4, M+1) it takes.
+SHARE, SHARED = "share", "shared_pdfs"
+
+
+def with_share(problem: Problem, share: float, pdfs: np.ndarray) -> Problem:
+    """The same problem for a table that is sampled with a fixed share ``share`` of four given
+    densities ``pdfs`` (4, M+1) on the problem's grid mixed into its own four, density k as
+    (1 − S) p_k + S d_k, p_k and d_k each normalized: a guiding table with the renderer's
+    defensive share (design §1.8). Every evaluation (the objective, its gradient, the health
+    figures) sees the table so mixed, so that an optimizer makes the best table *as it will be
+    sampled*; the table it returns is the unmixed p, which the renderer mixes as it reads it."""
+    pdfs = np.asarray(pdfs, dtype=np.float64)
+    if not 0 <= share < 1:
+        raise ValueError(f"the share must lie in [0, 1), not {share:g}")
+    if pdfs.shape != (4, problem.grid.size) or not np.all(np.isfinite(pdfs)) or np.any(pdfs < 0):
+        raise ValueError(f"the shared densities must be 4 finite non-negative rows on the grid's "
+                         f"{problem.grid.size} nodes, not {pdfs.shape}")
+    if np.any(trapezoid(problem.grid, pdfs) <= 0):
+        raise ValueError("a shared density has no mass on the problem's grid")
+    arrays = dict(problem.arrays)
+    arrays.update(jax.device_put({SHARE: np.float64(share), SHARED: normalize_density(problem.grid, pdfs)}))
+    return replace(problem, arrays=arrays)
 
 
 #: The objectives a problem can stand for (design §4.6).

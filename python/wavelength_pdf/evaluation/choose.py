@@ -62,6 +62,12 @@ def check_spp(spp: int, pixel_sampler: str) -> None:
                          "strata are modelled at powers of two (use --pixel-sampler independent otherwise)")
 
 
+def side_by_side(tr: transfer.Transfer, kinds: np.ndarray | None, pixels: np.ndarray | slice = slice(None)):
+    """The transfers of ``tr``'s pixels (those ``pixels`` selects), or with ``kinds`` (J, P, B)
+    each kind's side by side, (P, J B): the coefficients of the stacked kinds' bases."""
+    return tr.t[pixels] if kinds is None else np.concatenate(list(np.asarray(kinds)[:, pixels]), axis=1)
+
+
 def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pixel_sampler: str = "sobol",
                      pixels: np.ndarray | slice = slice(None), kinds: np.ndarray | None = None) -> float:
     """The mean over ``tr``'s lit pixels (or those ``pixels`` selects) of each pixel's predicted
@@ -70,19 +76,24 @@ def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pi
 
     ``spectrum`` may be a list of J kinds of light with ``kinds`` (J, P, B) their transfers
     (:func:`.transfer.kind_transfers`): each pixel is then lit by every kind along that kind's
-    own paths, sum_j E_j t_pj. ``tr``'s spread, where it has one, counts for one kind of light."""
+    own paths, sum_j E_j t_pj, each sample carrying one kind's light
+    (:func:`wavelength_pdf.predict.kinds_spread`); ``tr``'s spread, where it has one, counts
+    for one kind of light."""
     from wavelength_pdf import predict as P
 
     spectra = list(spectrum) if isinstance(spectrum, (list, tuple)) else [spectrum]
     if kinds is None and len(spectra) > 1:
         raise ValueError("several kinds of light need their transfers (kinds)")
-    t = tr.t if kinds is None else np.concatenate(list(np.asarray(kinds)), axis=1)
+    t = side_by_side(tr, kinds, pixels)
     pc = P.stack_path_colours([P.basis_path_colours(table, sp, basis) for sp in spectra])
     one = P.one_wavelength_covariance(table, spectra, basis)
-    return float(np.mean(P.pixel_de2(pc, t[pixels], spp, pixel_sampler, incoherence=tr.incoherence[pixels],
-                                     terminated=tr.terminated[pixels], one_wavelength=one,
-                                     spread=None if tr.spread is None or kinds is not None
-                                     else tr.spread[pixels])))
+    r = tr.incoherence[pixels]
+    if kinds is not None:
+        spread = P.kinds_spread(t, pc.target[:, 1], np.repeat(np.arange(len(spectra)), len(basis.labels)), r)
+    else:
+        spread = None if tr.spread is None else tr.spread[pixels]
+    return float(np.mean(P.pixel_de2(pc, t, spp, pixel_sampler, incoherence=r, terminated=tr.terminated[pixels],
+                                     one_wavelength=one, spread=spread)))
 
 
 #: The prefix of a polished candidate's name: "polished spd" is the ``spd`` table polished.
@@ -92,13 +103,16 @@ POLISHED = "polished"
 def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object],
                     say: Callable[[str], None] = lambda m: None, *, pixels: np.ndarray | slice = slice(None),
                     kinds: np.ndarray | None = None, as_sampled: Mapping[str, object] | None = None,
-                    max_evaluations: int | None = None, what: str = "the scene's pixels") -> dict[str, object]:
+                    share: tuple[float, object] | None = None, max_evaluations: int | None = None,
+                    what: str = "the scene's pixels") -> dict[str, object]:
     """Each of ``tables`` polished for ``tr``'s pixels (those ``pixels`` selects) at ``spp`` by
     the ``pixels`` objective (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6:
     the low-discrepancy pixel sampler's strata, with ``tr``'s spread where it has one), named
     "polished NAME". ``spectrum`` may be a list of kinds of light with ``kinds`` (J, P, B) their
     transfers, each pixel lit by every kind along its own paths (as :func:`wavelength_error`;
-    no spread then). ``max_evaluations``: each polish's budget (None: its default).
+    with their spread). ``share``: (S, D), each table polished as it is sampled with the share S
+    of table D's densities mixed in (a guiding table's defensive share, design §1.8).
+    ``max_evaluations``: each polish's budget (None: its default).
 
     A polish never comes out worse than its table by the objective, but which table it starts
     from matters: it is a local search, and the lamp's emission table and J's table sit in
@@ -110,7 +124,7 @@ def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[s
     polished (said); it is still predicted as given."""
     from wavelength_pdf.optimize import optimize_for_pixels
 
-    t = tr.t[pixels] if kinds is None else np.concatenate(list(np.asarray(kinds)[:, pixels]), axis=1)
+    t = side_by_side(tr, kinds, pixels)
     spread = None if tr.spread is None or kinds is not None else tr.spread[pixels]
     budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
     out = {}
@@ -121,7 +135,7 @@ def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[s
             try:
                 out[f"{POLISHED} {name}"] = optimize_for_pixels(
                     spectrum, start, t, tr.centres, spp, incoherence=tr.incoherence[pixels],
-                    terminated=tr.terminated[pixels], spread=spread, **budget).table
+                    terminated=tr.terminated[pixels], spread=spread, share=share, **budget).table
                 break
             except ValueError as e:
                 say(f"choose: {name} not polished{' as sampled' if start is not table else ''}: {e}")

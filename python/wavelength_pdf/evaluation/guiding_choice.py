@@ -129,15 +129,23 @@ def read_defensive(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
     return values[:, 0], values[:, 1], S
 
 
+def defensive_bands(lam: np.ndarray, phi: np.ndarray):
+    """The four equal-mass bands of the defensive spectrum Φ̂ that an optimized guiding table's
+    four densities take their share of (design §1.8): §1.7's stratified table of Φ̂ on the
+    renderer's 360-830 nm."""
+    from wavelength_pdf.spectra import Spectrum
+    from wavelength_pdf.stratified import stratified_table
+
+    return stratified_table(Spectrum("defensive", "the scene's emission", lam, phi), "spd", *RENDER_RANGE)
+
+
 def with_defensive(table, lam: np.ndarray, phi: np.ndarray, S: float):
     """``table`` as the renderer samples an optimized guiding table (design §1.8): each density
     (1 − S) p_k + S b_k, b_k the k-th of four equal-mass bands of the defensive spectrum Φ̂
     (§1.7's stratified table of Φ̂ on the renderer's 360-830 nm), on the union of the grids."""
-    from wavelength_pdf.spectra import Spectrum
-    from wavelength_pdf.stratified import stratified_table
     from wavelength_pdf.table import Table, normalize
 
-    bands = stratified_table(Spectrum("defensive", "the scene's emission", lam, phi), "spd", *RENDER_RANGE)
+    bands = defensive_bands(lam, phi)
     grid = np.union1d(np.asarray(table.grid, dtype=np.float64), bands.grid)
     pdfs = np.stack([(1 - S) * np.interp(grid, table.grid, p, left=0.0, right=0.0)
                      + S * np.interp(grid, bands.grid, b, left=0.0, right=0.0)
@@ -309,6 +317,7 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         if polish:
             for name, table in polished_tables(lamps[k] if kinds is None else kind_spectra, tr, spp, given[k], say,
                                                pixels=sel, kinds=kinds, as_sampled=tables[k],
+                                               share=(S, defensive_bands(lam, phi)),
                                                max_evaluations=polish_evaluations,
                                                what=f"table {k} ({mix})'s pixels").items():
                 given[k][name] = table

@@ -3,7 +3,10 @@
 - its value is the tabulated pixel prediction (``choose.wavelength_error``: the mean over the
   pixels of ``predict.pixel_de2``, with incoherence and dispersion, or with each pixel's
   spread) computed by the objective's own quadrature, for an emission table and an optimized one,
-  and for pixels lit by two kinds of light along their own paths;
+  and for pixels lit by two kinds of light along their own paths, each sample carrying one
+  kind's light (``kinds_spread``, checked against sampling);
+- with a fixed share of other densities mixed in (``with_share``) it is the value of the table
+  so mixed, as are the health figures and the estimator;
 - its gradient agrees with finite differences;
 - ``xyz_metrics`` is ``lab_quadratic``'s measure as a matrix;
 - ``optimize_for_pixels`` never returns a table predicted worse than the one it started from,
@@ -90,6 +93,30 @@ def test_value_for_several_kinds_of_light_is_their_prediction(fl2, scene, spp=64
         want = wavelength_error(table, [fl2, sodium], basis, scene, spp, kinds=kinds)
         _, got = _pixels_value(table, [fl2, sodium], scene, spp, t=np.concatenate(list(kinds), axis=1))
         assert got == pytest.approx(want, rel=2e-3)
+
+
+def test_kinds_spread_is_the_covariance_of_one_kind_per_sample():
+    """``kinds_spread`` against sampling: each sample picks kind j with probability its share
+    of the pixel's luminance and carries a t_j / q_j, a of mean 1 and relative variance r; the
+    samples' covariance converges to it. With one kind it is r t t'."""
+    rng = np.random.default_rng(7)
+    B, J = 3, 2
+    y = rng.uniform(0.2, 1.0, size=J * B)
+    kind_of = np.repeat(np.arange(J), B)
+    t = rng.uniform(0.0, 1.0, size=(2, J * B))
+    t[1, kind_of == 1] = 0.0  # a pixel the second kind does not light
+    r = np.array([0.5, 2.0])
+    S = P.kinds_spread(t, y, kind_of, r)
+    n = 400_000
+    for p in range(2):
+        q = np.array([t[p, kind_of == j] @ y[kind_of == j] for j in range(J)])
+        q /= q.sum()
+        j = rng.choice(J, size=n, p=q)
+        a = rng.gamma(1 / r[p], r[p], size=n)  # mean 1, variance r
+        x = a[:, None] * np.where(kind_of[None, :] == j[:, None], t[p] / np.where(q > 0, q, 1)[kind_of], 0.0)
+        np.testing.assert_allclose(np.cov(x.T), S[p], atol=0.02 * np.abs(S[p]).max())
+    one = P.kinds_spread(t[:, :B], y[:B], np.zeros(B, dtype=int), r)
+    np.testing.assert_allclose(one, r[:, None, None] * t[:, :B, None] * t[:, None, :B], rtol=1e-12, atol=1e-15)
 
 
 def test_dispersion_and_incoherence_count(fl2, scene):
@@ -200,6 +227,40 @@ def test_polish_refuses_a_table_that_misses_light(fl2, scene):
     pdfs = np.asarray(start.pdfs, dtype=np.float64) * (np.asarray(start.grid) <= 680.0)
     with pytest.raises(ValueError, match="not usable.*bias"):
         optimize_for_pixels(fl2, type(start)(grid=start.grid, pdfs=pdfs), scene.t, CENTRES, 64)
+
+
+@float64
+def test_a_shared_share_is_the_table_as_sampled(fl2, scene):
+    """``with_share``: the objective, its health figures and the estimator of a table P with
+    the share S of the densities D mixed in are those of the table (1 − S) P + S D itself; the
+    polish of a table so sampled is never worse, as so sampled, than its start."""
+    from wavelength_pdf import health as H
+    from wavelength_pdf.model import normalize_density
+    from wavelength_pdf.problem import with_share
+
+    start = stratified.stratified_table(fl2, "xyz", LO, HI)
+    grid = np.asarray(start.grid, dtype=np.float64)
+    problem, _ = _pixels_value(start, fl2, scene, 64)
+    D = normalize_density(grid, np.random.default_rng(6).uniform(0.1, 1.0, size=(4, grid.size)))
+    Pn = normalize_density(grid, start.pdfs)
+    for S in (0.0, 0.05, 0.4):
+        mixed = (1 - S) * Pn + S * D
+        shared = with_share(problem, S, D)
+        assert objective.J(shared, start.pdfs) == pytest.approx(objective.J(problem, mixed), rel=1e-12)
+        np.testing.assert_allclose(H.health(shared, start.pdfs).std, H.health(problem, mixed).std, rtol=1e-12)
+        u = np.linspace(0.01, 0.99, 7)
+        np.testing.assert_allclose(objective.estimate(shared, start.pdfs, u), objective.estimate(problem, mixed, u),
+                                   rtol=1e-12)
+    share = (0.2, type(start)(grid=grid, pdfs=D))
+    result = optimize_for_pixels(fl2, start, scene.t, CENTRES, 64, incoherence=scene.incoherence,
+                                 terminated=scene.terminated, share=share, max_evaluations=30)
+    after = objective.J(with_share(problem, 0.2, D), result.table.pdfs)
+    assert after <= objective.J(with_share(problem, 0.2, D), start.pdfs) * (1 + 1e-9)
+    assert result.J == pytest.approx(after, rel=2e-3)
+    with pytest.raises(ValueError, match="share"):
+        with_share(problem, 1.0, D)
+    with pytest.raises(ValueError, match="shared densities"):
+        with_share(problem, 0.1, D[:3])
 
 
 def test_pixels_objective_needs_its_weights(fl2):

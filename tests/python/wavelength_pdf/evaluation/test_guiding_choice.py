@@ -106,7 +106,9 @@ def test_kinds_light_the_scene_between_them(setup, pbrt):
 def test_a_pixel_lit_by_one_kind_is_predicted_as_under_that_lamp(setup, pbrt):
     """The per-kind prediction with the other kind's transfer zero is the one-lamp prediction
     (the stacked bases' extra functions add nothing), and two kinds along the same paths are
-    the one lamp whose spectrum is their sum."""
+    predicted worse than the one lamp whose spectrum is their sum: each sample carries one
+    kind's light (``predict.kinds_spread``), whose change from sample to sample the pixel's
+    stratification does not cancel."""
     from wavelength_pdf import predict as P
     from wavelength_pdf.colorimetry import cmfs
     from wavelength_pdf.evaluation.choose import wavelength_error
@@ -128,9 +130,8 @@ def test_a_pixel_lit_by_one_kind_is_predicted_as_under_that_lamp(setup, pbrt):
     parts = [np.interp(lam, k.wavelengths, k.values, left=0.0, right=0.0) for k in kinds]
     summed = Spectrum("sum", "test", lam, sum(e / np.trapezoid(e * ybar, lam) for e in parts))
     halves = np.stack([0.5 * whole.t, 0.5 * whole.t])
-    assert wavelength_error(table, kinds, basis, whole, 16, kinds=halves) == pytest.approx(
-        wavelength_error(table, summed, basis, whole, 16), rel=2e-3)
-    assert wavelength_error(table, kinds, basis, whole, 16, kinds=halves) != pytest.approx(one, rel=1e-2)
+    both = wavelength_error(table, kinds, basis, whole, 16, kinds=halves)
+    assert both > 2 * wavelength_error(table, summed, basis, whole, 16)  # 4.4 x here
     with pytest.raises(ValueError, match="kinds"):
         wavelength_error(table, kinds, basis, whole, 16)
 
