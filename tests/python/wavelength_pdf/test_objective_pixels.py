@@ -230,7 +230,7 @@ def test_polish_refuses_a_table_that_misses_light(fl2, scene):
 
 
 @float64
-def test_a_shared_share_is_the_table_as_sampled(fl2, scene):
+def test_a_fixed_share_is_the_table_as_sampled(fl2, scene):
     """``with_share``: the objective, its health figures and the estimator of a table P with
     the share S of the densities D mixed in are those of the table (1 − S) P + S D itself; the
     polish of a table so sampled is never worse, as so sampled, than its start."""
