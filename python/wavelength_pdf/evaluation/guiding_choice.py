@@ -309,6 +309,7 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
     elif not kind_spectra:
         say("choose-guiding: no kinds.txt (an older renderer's folder): each pixel lit by its table's mixture")
     of_pixel = tiles.table_of(tr.mask.shape)[tr.mask]
+    share = (S, defensive_bands(lam, phi))  # the same for every table's polish
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     choices = []
     for k, mix in sorted(mixtures.items()):
@@ -317,7 +318,7 @@ def choose_guiding_tables(scene: str | Path, spectra: str | Path, candidates: Ma
         if polish:
             for name, table in polished_tables(lamps[k] if kinds is None else kind_spectra, tr, spp, given[k], say,
                                                pixels=sel, kinds=kinds, as_sampled=tables[k],
-                                               share=(S, defensive_bands(lam, phi)),
+                                               share=share,
                                                max_evaluations=polish_evaluations,
                                                what=f"table {k} ({mix})'s pixels").items():
                 given[k][name] = table
