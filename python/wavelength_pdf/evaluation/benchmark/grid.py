@@ -153,14 +153,19 @@ COLOUR_ROWS = (SCENE_COLOURS, PIXEL_SCENE)
 #: colours, to see whether colours the table was not made for still gain over white.
 GENERIC_COLOURS = "optimized-colorchecker"
 #: The table a user gets for the job's image without an optimizer run of their own beyond
-#: J's: ``wavelength-pdf choose SCENE optimized.csv --polish --spread --spp 64``, the best by
+#: J's: ``wavelength-pdf choose SCENE optimized.csv --polish --spread --spp N``, the best by
 #: the image's predicted error (design §6.8) of the simple samplers, J's table and the ``spd``
-#: and J's tables polished for the scene's pixels (design §4.6), at IMAGE_SPP for every spp.
-#: On the lamp sweep's ColorChecker (32 x 24: each choice about 12 s). The scene sweep's
-#: copies could carry it too (a spread is 21 x 21 floats per lit pixel, 200 MB at 320 x 180),
-#: not yet measured there.
+#: and J's tables polished for the scene's pixels (design §4.6), one table for each spp N the
+#: job renders at (:func:`image_table_name`), as a user runs ``choose`` at the spp they render
+#: at. On the lamp sweep's two scenes (the ColorChecker's 32 x 24: each choice about 12 s; the
+#: Cornell box's 51 x 51: about 40 s). The scene sweep's copies could carry it too (a spread is
+#: 21 x 21 floats per lit pixel, 200 MB at 320 x 180), not yet measured there.
 IMAGE = "optimized-image"
-IMAGE_SPP = 64
+
+
+def image_table_name(spp: int) -> str:
+    """The file name of a job's :data:`IMAGE` table for ``spp``."""
+    return f"{IMAGE}-{spp}spp.csv"
 #: Every row a job can list (a lamp's earlier-work ``reference`` table, the check row and the
 #: floor are added by the job's plan, not listed).
 ROWS = (*TABLE_ROWS, *COLOUR_ROWS, GENERIC_COLOURS, IMAGE)
@@ -247,7 +252,7 @@ def full_grid(shared: Path = SHARED) -> GridSpec:
             # measured against a floor of their own, not the 16 spp one scaled.
             add(g, Job(SCENES[s], lamp, "sobol", spp=(16, 64), sweep="lamps",
                        floor_spp=(16, 64) if s == "colorchecker" else (16,),
-                       rows=TABLE_ROWS + (COLOUR_ROWS + (IMAGE,) if s == "colorchecker" else ())))
+                       rows=TABLE_ROWS + (COLOUR_ROWS if s == "colorchecker" else ()) + (IMAGE,)))
     for s in SCENES.values():
         if s.key in ("project-box", "two-lamp-box"):
             continue

@@ -64,9 +64,18 @@ class JobPlan:
     images: dict[tuple[str, int, int], RenderJob] = field(default_factory=dict)
     floor: dict[tuple[int, int], RenderJob] = field(default_factory=dict)
     truth_chunks: list[RenderJob] = field(default_factory=list)
+    #: The :data:`~.grid.IMAGE` row's tables by spp (``choose --spp N``'s, made by :func:`run`).
+    image_tables: dict[int, Path] = field(default_factory=dict)
 
     def renders(self) -> list[RenderJob]:
         return [*self.truth_chunks, *self.images.values(), *self.floor.values()]
+
+    def tables_at(self, spp: int) -> dict[str, Path]:
+        """Row -> table of the images at ``spp`` (the image row's table for that spp; at an
+        spp the job does not render at, e.g. a timing's, its table for the job's highest)."""
+        if not self.image_tables:
+            return self.tables
+        return {**self.tables, G.IMAGE: self.image_tables.get(spp, self.image_tables[max(self.image_tables)])}
 
 
 def sampler_of(row: str, tables: dict[str, Path], repeats: int = 1, net: bool = False) -> rendering.Sampler:
@@ -165,19 +174,20 @@ def plan_job(job: G.Job, out: Path, shared: Path, pbrt: Path | None) -> JobPlan:
             tables.update({row: folder / f"{row}.csv" for row in G.COLOUR_ROWS if row in job.rows})
         except SpectrumError:  # no diffuse colours in the scene (the glass of water): no such row
             rows = [row for row in rows if row not in G.COLOUR_ROWS]
+    p = JobPlan(job, folder, scene, spectrum, tables, reflectances)
     if G.IMAGE in job.rows:
         if job.lamp is None or job.pixel_sampler != "sobol":  # one kind of light, the polish's strata
             rows = [row for row in rows if row != G.IMAGE]
         else:
-            tables[G.IMAGE] = folder / f"{G.IMAGE}.csv"
-    p = JobPlan(job, folder, scene, spectrum, tables, reflectances)
+            p.image_tables = {spp: folder / G.image_table_name(spp) for spp in job.spp}
     for spp in job.spp:
+        at_spp = p.tables_at(spp)
         for seed in job.seeds:
             for row in rows:
                 if row == G.BUILTIN and spp not in job.check_spp:
                     continue
                 p.images[(row, spp, seed)] = RenderJob(scene, renders / f"{row}-{spp}-seed{seed}.exr",
-                                                       sampler_of(row, tables, net=job.wavelength_net), spp,
+                                                       sampler_of(row, at_spp, net=job.wavelength_net), spp,
                                                        seed, pbrt)
             if spp in job.floor_spp:
                 p.floor[(spp, seed)] = RenderJob(scene, renders / f"floor-{spp}-seed{seed}.exr",
@@ -213,10 +223,10 @@ def _made_by(row: str, p: JobPlan) -> tuple[object | None, str]:
     return None, OPTIMIZED[row]
 
 
-def image_table(p: JobPlan, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
+def image_table(p: JobPlan, spp: int, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
                 say: Callable[[str], None] = lambda m: None) -> Path:
-    """Write the job's :data:`~.grid.IMAGE` table: ``wavelength-pdf choose``'s best with
-    ``--polish --spread`` at :data:`~.grid.IMAGE_SPP` (:func:`wavelength_pdf.evaluation.choose.for_image`),
+    """Write the job's :data:`~.grid.IMAGE` table for ``spp``: ``wavelength-pdf choose --spp
+    SPP``'s best with ``--polish --spread`` (:func:`wavelength_pdf.evaluation.choose.for_image`),
     its candidates the simple samplers and the job's J table (``optimized``, made first), from
     the scene's transfer at its benchmark size (``out/transfer/SCENE``, rendered once)."""
     from wavelength_pdf.evaluation import choose, transfer
@@ -228,12 +238,12 @@ def image_table(p: JobPlan, out: Path, shared: Path = G.SHARED, pbrt: Path | Non
     else:  # a size of its own: the transfer of the job's copy (its lamp is replaced by a flat one)
         tr = transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True)
     given = {"optimized": read_table(p.tables["optimized"])} if "optimized" in p.tables else {}
-    preds = choose.for_image(p.spectrum, tr, G.IMAGE_SPP, given, say=say)
+    preds = choose.for_image(p.spectrum, tr, spp, given, say=say)
     best = preds[0]
-    path = p.tables[G.IMAGE]
+    path = p.image_tables[spp]
     write_table(path, Table(best.table.grid, best.table.pdfs, [
         *best.table.comments, f"{G.IMAGE}: {best.name}, best of {len(preds)} by the predicted image error at "
-        f"{G.IMAGE_SPP} spp ({', '.join(f'{q.name} {q.wavelength:.4g}' for q in preds)})"]))
+        f"{spp} spp ({', '.join(f'{q.name} {q.wavelength:.4g}' for q in preds)})"]))
     return path
 
 
@@ -275,13 +285,13 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
                 for f in as_completed(list(made.values())):
                     f.result()
                     bar.update(1)
-        image = [p for p in plans if G.IMAGE in p.tables and not p.tables[G.IMAGE].is_file()]
+        image = [(p, spp) for p in plans for spp, path in p.image_tables.items() if not path.is_file()]
         if image:
             if out is None:
                 raise ValueError(f"the {G.IMAGE} row needs the benchmark's folder (out)")
             with progress.bar(total=len(image), desc=G.IMAGE, file=sys.stderr, unit="table") as bar:
-                for p in image:
-                    image_table(p, out, shared, pbrt)
+                for p, spp in image:
+                    image_table(p, spp, out, shared, pbrt)
                     bar.update(1)
         futures = []
         # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),

@@ -60,7 +60,7 @@ def time_job(p: JobPlan, rounds: int, spp: int, out: Path, say: Callable[[str], 
         for row in order:
             img = out / f"{row}.exr"
             cmd = [str(pbrt), "--quiet", "--nthreads", "1", "--spp", str(spp), "--seed", str(1 + k),
-                   *sampler_of(row, p.tables, net=p.job.wavelength_net).args, "--outfile", str(img), str(p.scene)]
+                   *sampler_of(row, p.tables_at(spp), net=p.job.wavelength_net).args, "--outfile", str(img), str(p.scene)]
             c0, w0 = _cpu_children(), time.perf_counter()
             proc = subprocess.run(cmd, capture_output=True, text=True)
             wall, cpu = time.perf_counter() - w0, _cpu_children() - c0

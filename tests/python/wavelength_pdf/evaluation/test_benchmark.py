@@ -261,17 +261,33 @@ def test_measures_agree_and_sampling_the_lamp_pays(small):
 
 def test_the_image_row_is_the_predicted_best_of_its_candidates(small):
     """The IMAGE row (``choose --polish --spread``'s table) renders on the low-discrepancy job
-    under one lamp only (not with independent samples, not under several kinds of light), and
-    its table records which candidate won and every candidate's prediction, the winner's the
-    least."""
-    out, rows, _, _ = small
+    under one lamp only (not with independent samples, not under several kinds of light), with
+    a table chosen for each spp it renders at, each of which records which candidate won and
+    every candidate's prediction at that spp, the winner's the least; its images at an spp are
+    rendered with that spp's table."""
+    from wavelength_pdf.evaluation.benchmark import run
+
+    out, rows, _, pbrt = small
     assert {r["job"] for r in rows if r["row"] == G.IMAGE} == {"project-box/tri-band/sobol"}
-    table = out / "jobs" / "project-box" / "tri-band" / "sobol" / f"{G.IMAGE}.csv"
-    note = next(c for c in read_table(table).comments if c.startswith(f"{G.IMAGE}: "))
-    name, _, rest = note[len(G.IMAGE) + 2:].partition(", best of ")
-    predicted = dict(p.rsplit(" ", 1) for p in rest[rest.index("(") + 1:rest.rindex(")")].split(", "))
-    assert set(predicted) == {*G.SIMPLE, "polished spd"} and name in predicted
-    assert float(predicted[name]) == min(float(v) for v in predicted.values())
+    job = next(j for j in G.small_grid().jobs if j.name == "project-box/tri-band/sobol")
+    folder = out / "jobs" / "project-box" / "tri-band" / "sobol"
+    predictions = {}
+    for spp in job.spp:
+        note = next(c for c in read_table(folder / G.image_table_name(spp)).comments
+                    if c.startswith(f"{G.IMAGE}: "))
+        name, _, rest = note[len(G.IMAGE) + 2:].partition(", best of ")
+        assert rest.split(" (")[0].endswith(f"at {spp} spp"), note
+        predicted = dict(p.rsplit(" ", 1) for p in rest[rest.index("(") + 1:rest.rindex(")")].split(", "))
+        assert set(predicted) == {*G.SIMPLE, "polished spd"} and name in predicted
+        assert float(predicted[name]) == min(float(v) for v in predicted.values())
+        predictions[spp] = predicted
+    # Fewer samples, more wavelength noise: every candidate is predicted worse at the lower spp.
+    lo, hi = sorted(job.spp)[:2]
+    assert all(float(predictions[lo][k]) > float(predictions[hi][k]) for k in predictions[hi])
+    plan = run.plan_job(job, out, G.SHARED, pbrt)
+    for (row, spp, _), r in plan.images.items():
+        if row == G.IMAGE:
+            assert r.sampler.args[r.sampler.args.index("--wavelength-pdf") + 1] == str(folder / G.image_table_name(spp))
 
 
 def test_outputs_and_resume(small):
