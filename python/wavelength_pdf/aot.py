@@ -45,6 +45,7 @@ import stat
 import sys
 import tempfile
 import time
+import weakref
 from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
@@ -246,6 +247,21 @@ def _leaf_signature(x: Any):
     raise TypeError(f"unsupported argument {type(x).__name__}")
 
 
+#: Every :class:`DiskJit` of the process, for :func:`clear_memory`.
+_instances: weakref.WeakSet = weakref.WeakSet()
+
+
+def clear_memory() -> None:
+    """Drop the executables the process holds in memory: every :class:`DiskJit`'s and JAX's
+    own caches. A long process that compiles for many shapes (the benchmark's choices over a
+    lamp sweep: each lamp's grid, each scene's pixels) otherwise keeps them all and runs out
+    of memory maps (seen: LLVM "Cannot allocate memory" after 25 choices); later calls load
+    them from disk again, or compile."""
+    for f in list(_instances):
+        f._compiled.clear()
+    jax.clear_caches()
+
+
 class DiskJit:
     """A jitted function whose executables are also kept on disk (see the module)."""
 
@@ -258,6 +274,7 @@ class DiskJit:
         self.__wrapped__ = jitted
         self._static = tuple(static_argnames)
         self._signature = inspect.signature(fn) if self._static else None
+        _instances.add(self)
 
     def _split(self, args, static):
         """(non-static arguments, static ones as keywords, signature); the signature is

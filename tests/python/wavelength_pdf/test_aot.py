@@ -58,6 +58,19 @@ def test_loaded_executable_gives_identical_results(cache_dir):
 
 
 @float64
+def test_clear_memory_drops_the_executables_and_the_next_call_loads_them(cache_dir):
+    x = jnp.linspace(0.0, 3.0, 11)
+    arr = {"w": jnp.linspace(1.0, 2.0, 11)}
+    f = _fresh()
+    want = np.asarray(f(x, arr, 0.5, "cumsum"))
+    assert f in aot._instances and len(f._compiled) == 1
+    aot.clear_memory()
+    assert not f._compiled
+    np.testing.assert_array_equal(np.asarray(f(x, arr, 0.5, "cumsum")), want)
+    assert len(f._compiled) == 1 and len(list(cache_dir.glob("f-*.pkl"))) == 1
+
+
+@float64
 def test_damaged_file_is_replaced(cache_dir):
     x = jnp.linspace(0.0, 1.0, 8)
     arr = {"w": jnp.ones(8)}

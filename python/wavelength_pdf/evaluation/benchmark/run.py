@@ -289,9 +289,12 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
         if image:
             if out is None:
                 raise ValueError(f"the {G.IMAGE} row needs the benchmark's folder (out)")
+            from wavelength_pdf import aot
+
             with progress.bar(total=len(image), desc=G.IMAGE, file=sys.stderr, unit="table") as bar:
                 for p, spp in image:
                     image_table(p, spp, out, shared, pbrt)
+                    aot.clear_memory()  # each choice compiles for its own shapes
                     bar.update(1)
         futures = []
         # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),
