@@ -166,6 +166,8 @@ IMAGE = "optimized-image"
 def image_table_name(spp: int) -> str:
     """The file name of a job's :data:`IMAGE` table for ``spp``."""
     return f"{IMAGE}-{spp}spp.csv"
+
+
 #: Every row a job can list (a lamp's earlier-work ``reference`` table, the check row and the
 #: floor are added by the job's plan, not listed).
 ROWS = (*TABLE_ROWS, *COLOUR_ROWS, GENERIC_COLOURS, IMAGE)
