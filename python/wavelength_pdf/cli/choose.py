@@ -137,7 +137,8 @@ def add_parser(sub) -> None:
     c.add_argument("-o", "--output", type=Path, default=None, metavar="BEST.csv", help="write the best table here")
     c.add_argument("--polish", action="store_true",
                    help="also the spd table and each given table polished for the scene's pixels at --spp "
-                        "(the pixels objective, design §4.6; seconds each, no optimizer run needed)")
+                        "(the pixels objective, design §4.6; seconds each, no optimizer run needed; below "
+                        "64 spp each also polished at 64 spp first)")
     c.add_argument("--spread", action="store_true",
                    help="predict with each pixel's spread (the spectra its samples see, two or more at an edge; "
                         "design §6.8) from a further seed pair at 4 x 4 sub-pixels: measured at the scene's own "
