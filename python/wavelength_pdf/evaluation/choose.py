@@ -101,8 +101,8 @@ POLISHED = "polished"
 #: Below this spp :func:`for_image` also polishes each start at this spp first and then at the
 #: one asked for ("polished spd via 64 spp"). At 16 spp the polish from J's table stopped in a
 #: worse basin than the table polished at 64 spp, by the prediction at 16 spp itself and in the
-#: renders (docs/benchmark.md, "The table for the image at each spp"): the objective at the
-#: higher spp is the smoother one to descend first.
+#: renders (docs/benchmark.md, "The table for the image at each spp, and on the Cornell
+#: box"). Why the higher spp's objective leads to the better basin is not measured.
 CONTINUATION_SPP = 64
 
 

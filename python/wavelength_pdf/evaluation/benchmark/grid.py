@@ -157,8 +157,9 @@ GENERIC_COLOURS = "optimized-colorchecker"
 #: the image's predicted error (design §6.8) of the simple samplers, J's table and the ``spd``
 #: and J's tables polished for the scene's pixels (design §4.6), one table for each spp N the
 #: job renders at (:func:`image_table_name`), as a user runs ``choose`` at the spp they render
-#: at. On the lamp sweep's two scenes (the ColorChecker's 32 x 24: each choice about 12 s; the
-#: Cornell box's 51 x 51: about 40 s). The scene sweep's copies could carry it too (a spread is
+#: at. On the lamp sweep's two scenes (each choice at 64 spp about 12 s on the ColorChecker's
+#: 32 x 24 and 40 s on the Cornell box's 51 x 51; at 16 spp, with the polish's continuation
+#: from 64 spp, about three times that). The scene sweep's copies could carry it too (a spread is
 #: 21 x 21 floats per lit pixel, 200 MB at 320 x 180), not yet measured there.
 IMAGE = "optimized-image"
 
