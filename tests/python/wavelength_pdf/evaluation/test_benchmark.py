@@ -98,7 +98,7 @@ def test_grid_has_the_lamps_and_scenes_it_promises():
         assert not g.jobs and len(g.skipped) == 3
 
 
-def test_rows_can_be_narrowed_and_the_colorchecker_has_a_floor_at_each_spp():
+def test_rows_can_be_narrowed_and_the_lamp_sweep_has_a_floor_at_each_spp():
     g = G.small_grid()
     assert G.with_rows(g, None) is g
     narrow = G.with_rows(g, ["spd", "optimized"])
@@ -108,11 +108,12 @@ def test_rows_can_be_narrowed_and_the_colorchecker_has_a_floor_at_each_spp():
     assert [j.floor_spp for j in narrow.jobs] == [j.floor_spp for j in g.jobs]
     with pytest.raises(ValueError, match="unknown rows floor, sdp"):
         G.with_rows(g, ["spd", "sdp", "floor"])
-    # The lamp sweep's ColorChecker is measured against a floor of its own at every spp; the
-    # Cornell box's (eight times a render's paths) at 16 spp only.
-    for j in G.select(G.full_grid(), ["lamps"]).jobs:
-        if j.sweep == "lamps":
-            assert j.floor_spp == (j.spp if j.scene.key == "colorchecker" else (16,)), j.name
+    # Every job of the lamp sweep, on both scenes, is measured against a floor of its own at
+    # each of the sweep's spp (16 and 64; a job also in the scene sweep renders at 256 too).
+    jobs = G.select(G.full_grid(), ["lamps"]).jobs
+    assert {j.scene.key for j in jobs} == {s for s in G.LAMP_SWEEP_SCENES if G.SCENES[s].available()}
+    for j in jobs:
+        assert {16, 64} <= set(j.floor_spp), j.name
 
 
 def test_wavelength_net_reaches_every_render_of_a_job(tmp_path):
