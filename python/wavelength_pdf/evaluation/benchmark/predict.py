@@ -262,9 +262,10 @@ def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, c
 
 def floor_of(meas: dict, job: str, spp: int) -> float:
     """The job's measured floor (de2 of the ``floor`` row) at spp; where it was rendered only
-    at fewer spp (the lamp sweep before the twelfth session: 16), scaled by their ratio (path
-    noise of independent paths falls as 1/spp; on the Cornell box with ``--wavelength-net``
-    the 16-spp floor so scaled was 1.13 times too low at 64 spp, docs/benchmark.md)."""
+    at fewer spp (results of a lamp sweep run before its floor was rendered at 64 spp too),
+    scaled by their ratio (path noise of independent paths falls as 1/spp; on the Cornell box
+    with ``--wavelength-net`` the 16-spp floor so scaled was 1.13 times too low at 64 spp,
+    docs/benchmark.md)."""
     f = meas.get((job, G.FLOOR, spp))
     if f is not None:
         return f["de2"]
