@@ -51,7 +51,7 @@ def main(argv=None) -> int:
                     help="with --colours scene or pixels: the renderer (default: as design §7)")
     ap.add_argument("--spread", action="store_true",
                     help="with --colours pixels: each pixel's spread (the spectra its samples see, from two "
-                         "renders of a 4x finer copy) in place of its incoherence (wavelength_pdf.evaluation."
+                         "renders of an 8x finer copy, the same paths at independent wavelengths) in place of its incoherence (wavelength_pdf.evaluation."
                          "transfer.spread)")
     ap.add_argument("--only", nargs="+", default=None, metavar="PREFIX", help="only jobs whose name starts so")
     ap.add_argument("--pool", type=Path, nargs="+", default=None, metavar="CSV",

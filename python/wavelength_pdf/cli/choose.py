@@ -130,7 +130,7 @@ def add_parser(sub) -> None:
                     "the benchmark's scene sweep its choice was never worse than the best simple sampler by "
                     "more than 10 % (docs/benchmark.md). --polish adds tables polished for the scene's pixels "
                     "(from the lamp's own spd table, and from each table given), --spread the spectra each "
-                    "pixel's samples see at the edges of what it shows.")
+                    "pixel's paths see (at the edges of what it shows, and off differently coloured walls).")
     c.add_argument("scene", type=Path, metavar="SCENE.pbrt", help="a pbrt-v4 scene lit by one kind of light")
     c.add_argument("tables", type=Path, nargs="*", metavar="TABLE.csv", help="tables to compare (design §2)")
     c.add_argument("--no-simple", action="store_true", help="compare the given tables only")
@@ -140,9 +140,10 @@ def add_parser(sub) -> None:
                         "(the pixels objective, design §4.6; seconds each, no optimizer run needed; below "
                         "64 spp each also polished at 64 spp first)")
     c.add_argument("--spread", action="store_true",
-                   help="predict with each pixel's spread (the spectra its samples see, two or more at an edge; "
-                        "design §6.8) from a further seed pair at 4 x 4 sub-pixels: measured at the scene's own "
-                        "film size, so the renders cost more than at the default tenth")
+                   help="predict with each pixel's spread (the spectra its paths see, two or more at an edge or "
+                        "off coloured walls; design §6.8) from two renders of the same paths at independent "
+                        "wavelengths, one path per sub-pixel at 8 x 8 sub-pixels: measured at the scene's own film "
+                        "size, so the renders cost more than at the default tenth")
     _prediction_options(c, None)
     c.set_defaults(func=cmd_choose, extra="evaluation")
 

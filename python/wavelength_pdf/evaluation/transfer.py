@@ -76,10 +76,11 @@ class Transfer:
 
 
 #: The renders that measure each pixel's spread (:func:`spread`) cut each side of a pixel into
-#: this many sub-pixels, at SPREAD_SPP samples each: as many samples per pixel as the
-#: incoherence renders, with as many wavelengths per path.
-SPREAD_FACTOR = 4
-SPREAD_SPP = 4
+#: this many sub-pixels, at SPREAD_SPP samples each (one path per sub-pixel, so that their
+#: product is each path's own: as many paths per pixel as the incoherence renders, with as many
+#: wavelengths per path).
+SPREAD_FACTOR = 8
+SPREAD_SPP = 1
 #: The pixel filters the spread models, with pbrt-v4's default radius of each (pixels).
 FILTER_RADII = {"gaussian": 1.5, "box": 0.5, "triangle": 2.0}
 
@@ -144,12 +145,15 @@ def pixel_filter(scene_file: Path) -> tuple[str, float, float, float]:
 
 
 def spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.ndarray) -> np.ndarray:
-    """(h, w, B, B): each pixel's spread from two independent renders ``a``, ``b``
-    (H, W, B) of its sub-pixels, H = h * k, W = w * k: the covariance over the pixel's samples
-    of the spectrum each sees, sum_q w_q (T_q - T)(T_q - T)' with w_q the pixel's shares of
-    its samples (:func:`filter_shares`, (h, H) and (w, W)). Each sub-pixel's own noise is
-    left out by taking one factor from each render (their noises are independent), so the
-    estimate is unbiased, however noisy; only means over many pixels are meant."""
+    """(h, w, B, B): each pixel's spread from two renders ``a``, ``b`` (H, W, B) of its
+    sub-pixels, H = h * k, W = w * k, whose wavelength noises are independent: the covariance
+    over the pixel's samples of the spectrum each sees, sum_q w_q (T_q - T)(T_q - T)' with
+    w_q the pixel's shares of its samples (:func:`filter_shares`, (h, H) and (w, W)). One
+    factor of each product comes from each render, so that their noise cancels in expectation
+    (unbiased, however noisy; only means over many pixels are meant). From two seeds, T_q is
+    each sub-pixel's mean spectrum; from one seed at two wavelength seeds and one path per
+    sub-pixel (:func:`spread`), each path's own, and the mean's product, taken from the same
+    paths, then counts sum_q w_q^2 of that covariance (about 1 % at 8 sub-pixels a side)."""
     if a.shape != b.shape or a.ndim != 3 or shares_y.shape[1] != a.shape[0] or shares_x.shape[1] != a.shape[1]:
         raise ValueError(f"spread_of: renders {a.shape} and {b.shape} against shares {shares_y.shape}, "
                          f"{shares_x.shape}")
@@ -177,19 +181,22 @@ def spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.n
 def spread(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: Path | None = None,
            nthreads: int | None = None, factor: int = SPREAD_FACTOR, spp: int = SPREAD_SPP) -> np.ndarray:
     """(h, w, B, B): the spread of every pixel of ``source`` rendered at ``size`` (w, h)
-    under the flat lamp (:func:`spread_of`), in bucket units, from a seed pair of a copy at
+    under the flat lamp (:func:`spread_of`), in bucket units, from two renders of a copy at
     ``factor`` times the resolution (``folder``; kept while the scene and the renderer are
-    unchanged) with the scene's own pixel filter (:func:`pixel_filter`).
+    unchanged) with the scene's own pixel filter (:func:`pixel_filter`): the same paths
+    (``--seed 1``) at independent wavelengths (``--wavelength-seed`` 1 and 2, design §5.2).
 
-    A pixel whose samples see several surfaces (a patch's edge, a texture finer than a pixel)
-    has them see different spectra, T_q = T + D_q: the part D of each sample's estimate is not
-    stratified by the pixel's u (its samples on each surface are a subset), and adds
-    sum_bc S_bc Cov_u(C_b, C_c) / N, S the spread (:func:`wavelength_pdf.predict.pixel_de2`)."""
+    A pixel's paths see different spectra, T = t + D: where they reach different surfaces (a
+    patch's edge, a texture finer than a pixel), and where one path reaches the lamp off a
+    red wall and the next off a green one. The part D of each sample's estimate is not
+    stratified by the pixel's u, and adds sum_bc S_bc Cov_u(C_b, C_c) / N, S the spread
+    (:func:`wavelength_pdf.predict.pixel_de2`). With ``spp`` 1 each sub-pixel is one path and
+    S is the paths' own covariance; with more, that of their means in a sub-pixel."""
     w, h = size
     copy = copy_scene(source, folder, (w * factor, h * factor))
     kind, rx, ry, sigma = pixel_filter(copy)
-    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=seed, repeats=INCOHERENCE_REPEATS,
-                                 name=f"spread-seed{seed}.exr"))[1] for seed in (1, 2))
+    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=1, repeats=INCOHERENCE_REPEATS,
+                                 wavelength_seed=ws, name=f"spread-wavelengths{ws}.exr"))[1] for ws in (1, 2))
     return spread_of(a, b, filter_shares(h, factor, kind, ry, sigma), filter_shares(w, factor, kind, rx, sigma))
 
 
@@ -263,9 +270,10 @@ def copy_scene(source: str | Path, folder: str | Path, resolution: tuple[int, in
 
 
 def render(scene_file: Path, pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None,
-           seed: int = 0, repeats: int = 1, name: str = "transfer.exr") -> Path:
+           seed: int = 0, repeats: int = 1, name: str = "transfer.exr",
+           wavelength_seed: int | None = None) -> Path:
     """Render the transfer scene to ``name`` beside it (once: an image newer than the scene
-    and the renderer is kept)."""
+    and the renderer is kept), with ``wavelength_seed`` as ``--wavelength-seed``."""
     from wavelength_pdf.renderer import find_pbrt
 
     exr = scene_file.with_name(name)
@@ -275,6 +283,7 @@ def render(scene_file: Path, pbrt: Path | None = None, spp: int = SPP, nthreads:
     tmp = exr.with_name(exr.stem + ".tmp.exr")
     cmd = [str(binary), "--quiet", "--spp", str(spp), "--seed", str(seed), "--outfile", str(tmp),
            *(["--wavelength-repeats", str(repeats)] if repeats > 1 else []),
+           *(["--wavelength-seed", str(wavelength_seed)] if wavelength_seed is not None else []),
            *(["--nthreads", str(nthreads)] if nthreads else []), str(scene_file)]
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0 or not tmp.is_file():

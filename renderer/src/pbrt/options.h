@@ -56,6 +56,10 @@ struct RenderOptions {
     // except the wavelength number, shifted by k/K, and average them (design §5.2): the
     // benchmark's floor, an image whose wavelength noise is averaged away.
     int wavelengthRepeats = 1;
+    // --wavelength-seed S: each sample's wavelength number u drawn from a hash of the pixel,
+    // the sample index and S alone (design §5.2), so that renders with one --seed and two S
+    // trace the same paths at independent wavelengths (the spread's renders, design §6.8).
+    std::optional<uint64_t> wavelengthSeed;
     // --emission-spectrum FILE: write the scene's total emitted spectral power (design §5.6)
     // instead of rendering (the film's output path is then not checked).
     std::string emissionSpectrum;

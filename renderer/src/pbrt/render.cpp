@@ -2,7 +2,9 @@
 
 #include <pbrt/guiding.h>
 #include <pbrt/scene.h>
+#include <pbrt/util/lowdiscrepancy.h>
 #include <pbrt/util/progress.h>
+#include <pbrt/util/rng.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
@@ -30,6 +32,7 @@ ImageMetadata RenderMetadata(const Scene &scene, const RenderStats &stats) {
     m.floats["meanPathDepth"] = stats.paths ? float(double(stats.scatterings) / double(stats.paths)) : 0.f;
     if (stats.wavelengthRepeats > 1) m.ints["wavelengthRepeats"] = stats.wavelengthRepeats;
     if (scene.wavelengthNet) m.ints["wavelengthNet"] = 1;
+    if (scene.wavelengthSeed) m.strings["wavelengthSeed"] = std::to_string(*scene.wavelengthSeed);
     m.strings["seed"] = std::to_string(scene.sampler.Seed());
     // pbrt-v4's camera matrices (cameras.h), row by row.
     auto rows = [](const SquareMatrix4 &a) {
@@ -125,6 +128,12 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
                                 // dimensions are the same with and without the net.
                                 Float uLight = 0;
                                 if (net) net->Sample(s, &uFilter, &uLambda, &uLight);
+                                // Drawn after the sampler's (and the net's) so that every other
+                                // number of the path stays as it is.
+                                if (scene.wavelengthSeed)
+                                    uLambda = ToUnitFloat(uint32_t(
+                                        HashInts({uint64_t(uint32_t(x)), uint64_t(uint32_t(y)), uint64_t(s),
+                                                  *scene.wavelengthSeed, 0x776c73ULL}) >> 32));
                                 // Film position from the filter's distribution around the pixel centre.
                                 fs = scene.disablePixelJitter ? FilterSample{Point2f(0, 0), 1}
                                                               : scene.filter.Sample(uFilter);

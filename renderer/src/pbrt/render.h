@@ -28,6 +28,8 @@ struct RenderStats {
 // Renders into scene.film. nThreads 0 uses every core. wavelengthRepeats K > 1 traces each
 // camera sample K times, with the sampler's numbers replayed except the wavelength number u,
 // which becomes (u + k/K) mod 1, and adds their mean (--wavelength-repeats, design §5.2).
+// With scene.wavelengthSeed, u is a hash of the pixel, the sample index and that seed
+// (--wavelength-seed), before the repeats' shifts.
 //
 // afterPass, when given, makes the render go in passes over the whole image, of 1, 1, 2, 4,
 // ..., 64 samples per pixel (pbrt-v4's waves), and is called after each with the samples per
@@ -54,6 +56,7 @@ RenderStats Render(const Scene &scene, int nThreads, bool quiet, int wavelengthR
 //   meanPathDepth             float   surfaces a camera path reached (at most maxdepth + 1), averaged
 //   wavelengthRepeats         int     K of --wavelength-repeats (only when K > 1)
 //   wavelengthNet             int     1 with --wavelength-net (absent otherwise)
+//   wavelengthSeed            string  S of --wavelength-seed, in decimal (absent otherwise)
 //   wavelengthEmissionWeight  string  with emission sampling (and guiding): its weight, "spd", "luminance" or "xyz"
 // With wavelength guiding (guiding.h, AddGuidingMetadata; renderCPUSeconds then includes the
 // pre-pass and the tables):

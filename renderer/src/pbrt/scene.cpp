@@ -737,6 +737,7 @@ std::unique_ptr<Scene> Build(const RenderOptions &opts, const std::function<void
     scene->disablePixelJitter |= opts.disablePixelJitter;
     scene->disableWavelengthJitter |= opts.disableWavelengthJitter;
     scene->wavelengthNet = opts.wavelengthNet;
+    scene->wavelengthSeed = opts.wavelengthSeed;
     Verbose("loaded the scene: " + std::to_string(scene->lights.size()) + " lights");
     return scene;
 }

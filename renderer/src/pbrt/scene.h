@@ -47,6 +47,9 @@ struct Scene {
     // --wavelength-net: each sample's film position, wavelength number and first light choice
     // from one net per pixel (samplers.h, WavelengthNet) instead of the sampler's dimensions.
     bool wavelengthNet = false;
+    // --wavelength-seed S: each sample's wavelength number from a hash of (pixel, sample, S)
+    // in place of the sampler's or the net's (render.h).
+    std::optional<uint64_t> wavelengthSeed;
 
     // Whether nothing opaque lies on the segment of a shadow ray.
     // skipSphere: a sphere's id (Sphere::id) the segment is known not to cross, or 0.

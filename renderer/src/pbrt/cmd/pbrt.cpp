@@ -116,6 +116,11 @@ Wavelengths (four per path from one random number):
                                numbers but the wavelength number shifted by k/K, and
                                average: wavelength noise averaged away at K times the cost
                                (the benchmark's floor, design §5.2; default 1)
+  --wavelength-seed S          draw each sample's wavelength number from a hash of the
+                               pixel, the sample index and S alone, every other number
+                               unchanged: renders with one --seed and two S trace the same
+                               paths at independent wavelengths (a pixel's spread, design
+                               §6.8); same expectation, u no longer stratified
 Scene:
   --emission-spectrum FILE     render nothing: write the scene's total emitted spectral
                                power (pbrt-v4's light power summed over its lights) to FILE
@@ -422,6 +427,8 @@ int main(int argc, char **argv) {
             if (opts.guidingSpectraDir.empty()) Usage("--wavelength-guiding-spectra needs a folder");
         } else if (flag == "--wavelength-repeats") {
             opts.wavelengthRepeats = int(ParseInt(flag, value(), 1, 1 << 16));
+        } else if (flag == "--wavelength-seed") {
+            opts.wavelengthSeed = uint64_t(ParseInt(flag, value(), 0, (1LL << 62)));
         } else if (flag == "--wavelength-pdf-defensive") {
             hasDefensive = true;
             opts.defensiveShare = Float(ParseFloat(flag, value()));

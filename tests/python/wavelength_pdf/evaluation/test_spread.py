@@ -9,7 +9,10 @@
   incoherence r; an edge between two spectra of the same luminance, which the incoherence
   cannot see, adds the unstratified noise of their difference; the objective's weights
   (``predict.pixel_weights``) give the same mean;
-- the scene's pixel filter is read, with pbrt-v4's defaults.
+- the scene's pixel filter is read, with pbrt-v4's defaults;
+- rendered, the spread is each path's own (one seed at two wavelength seeds): it sees the
+  patches' edges of a ColorChecker, and the red and green light a white floor gets off two
+  walls, which a seed pair of sub-pixel means does not.
 """
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ import pytest
 
 from wavelength_pdf import predict as P, stratified
 from wavelength_pdf.evaluation import transfer
+from wavelength_pdf.exr import read_spectral
 from wavelength_pdf.spectra import load_spectrum
 
 CENTRES = np.arange(390.0, 780.0, 20.0)
@@ -130,10 +134,11 @@ def test_the_scene_pixel_filter_is_read(tmp_path):
 
 
 def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
-    """Rendered: the ColorChecker at 64 x 48 under the flat lamp. The pixels whose neighbours
-    show another spectrum (a patch's edge) have a far larger spread, relative to their own
-    spectrum, than the pixels inside a patch, where one spectrum is seen and the estimate's
-    noise cancels between the two renders."""
+    """Rendered: the ColorChecker at 64 x 48 under the flat lamp. Inside a patch every path
+    sees one spectrum shape, only its magnitude varies (the spread is r t t'); at a patch's edge
+    the paths see two. So the spread's part across the pixel's own spectrum, relative to it, is
+    far larger at the edges than inside, where the wavelength noise cancels between the two
+    renders."""
     from repo_paths import REPO
 
     scene = REPO / "scenes" / "benchmark" / "colorchecker" / "scene.pbrt"
@@ -148,7 +153,9 @@ def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
             d = np.linalg.norm(img - np.roll(img, shift, axis=axis), axis=2)
             step = np.maximum(step, d)
     step = (step / np.maximum(norm, 1e-12))[tr.mask]
-    rel = np.trace(tr.spread, axis1=1, axis2=2) / np.maximum(norm[tr.mask] ** 2, 1e-12)
+    u = tr.t / np.maximum(np.linalg.norm(tr.t, axis=1, keepdims=True), 1e-300)
+    across = np.eye(u.shape[1])[None] - u[:, :, None] * u[:, None, :]  # projects t out
+    rel = np.einsum("pij,pjk,pki->p", across, tr.spread, across) / np.maximum(norm[tr.mask] ** 2, 1e-12)
     edge, inside = rel[step > 0.5], rel[step < 0.05]
     assert edge.size > 50 and inside.size > 50
     assert edge.mean() > 10 * abs(inside.mean())
@@ -167,3 +174,61 @@ def test_a_noisy_spread_is_measured_linearly(fl2_basis):
         up, down, mid = (P.pixel_de2(fl2_basis, t, 16, metric=metric, spread=S) for S in (S0 + E, S0 - E, S0))
         assert up + down == pytest.approx(2 * mid, rel=1e-9)
         assert up != pytest.approx(mid, rel=1e-3)
+
+
+# A white floor seen from above, lit by a lamp over it and by what a red wall and a green one
+# (or two grey ones) on either side throw back: every pixel sees one surface, but its paths
+# reach the lamp directly, off the red wall or off the green one.
+WALLS = """LookAt 0 1.5 0  0 0 0  0 0 1
+Camera "perspective" "float fov" [20]
+Film "rgb" "integer xresolution" [12] "integer yresolution" [12]
+Sampler "sobol"
+Integrator "path" "integer maxdepth" [3]
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "blackbody L" [5000] "float scale" [20]
+  Translate 0 2.8 0
+  Shape "sphere" "float radius" [0.2]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.8 0.8 0.8]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-1 0 -2  1 0 -2  1 0 2  -1 0 2]
+Material "diffuse" "rgb reflectance" [LEFT]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-1 0 -2  -1 3 -2  -1 3 2  -1 0 2]
+Material "diffuse" "rgb reflectance" [RIGHT]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [1 0 -2  1 0 2  1 3 2  1 3 -2]
+"""
+
+
+def _red_green(tr, S):
+    """Each pixel's spread along red minus green (the buckets above 580 nm less those of
+    480-580 nm) with its own spectrum t projected out, relative to |t|^2: one direction, so
+    that the noise of the other buckets stays out."""
+    c = tr.centres
+    d0 = (c > 580).astype(float) - ((c > 480) & (c < 580)).astype(float)
+    u = tr.t / np.linalg.norm(tr.t, axis=1, keepdims=True)
+    d = d0[None] - (u @ d0)[:, None] * u
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return np.einsum("pi,pij,pj->p", d, S, d) / np.sum(tr.t ** 2, axis=1)
+
+
+def test_the_spread_is_each_paths_own_and_sees_light_off_coloured_walls(tmp_path, pbrt):
+    """The floor's sub-pixels all have the same mean spectrum, so a seed pair's spread (each
+    factor a sub-pixel's mean) sees little across the pixel's spectrum; the spread of one seed
+    at two wavelength seeds (each factor one path's own) sees the red and the green light, and
+    nothing with grey walls."""
+    walls = {"coloured": ("0.8 0.05 0.05", "0.05 0.8 0.05"), "grey": ("0.3 0.3 0.3", "0.3 0.3 0.3")}
+    got = {}
+    for name, (left, right) in walls.items():
+        scene = tmp_path / f"{name}.pbrt"
+        scene.write_text(WALLS.replace("LEFT", left).replace("RIGHT", right))
+        tr = transfer.of_file(scene, tmp_path / name, None, pbrt, spp=256, with_spread=True)
+        assert tr.t.shape[0] == 144  # every pixel sees the lit floor
+        got[name] = _red_green(tr, tr.spread).mean()
+        if name == "coloured":
+            copy = tmp_path / name / "spread" / "scene.pbrt"
+            a, b = (read_spectral(transfer.render(copy, pbrt, 1, seed=s, repeats=8, name=f"seed{s}.exr"))[1]
+                    for s in (1, 2))
+            sh = transfer.filter_shares(12, transfer.SPREAD_FACTOR)
+            got["seed pair"] = _red_green(tr, transfer.spread_of(a, b, sh, sh)[tr.mask] * tr.scale ** 2).mean()
+    assert got["coloured"] > 20 * abs(got["grey"]), got
+    assert got["coloured"] > 20 * abs(got["seed pair"]), got
