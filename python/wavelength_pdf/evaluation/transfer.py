@@ -22,6 +22,7 @@ pixel spectra are sums of differently shaped lamps) and are refused.
 """
 from __future__ import annotations
 
+import os
 import subprocess
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -252,10 +253,12 @@ def copy_scene(source: str | Path, folder: str | Path, resolution: tuple[int, in
     jobs are); for the scene's own lamps, only when they are of one kind
     (:func:`one_kind`). ``dark``: emitters (file name, line) left dark in the copy
     (:func:`kind_transfers`)."""
+    from wavelength_pdf.evaluation.render import temporary
     from wavelength_pdf.evaluation.scene_edit import DEFAULT_FILM, edit_scene
 
     source, folder = Path(source), Path(folder)
-    draft = edit_scene(source, FLAT, folder / "draft.pbrt", lo=LO, hi=HI, resolution=resolution,
+    # A draft of its own and an atomic write: two processes may copy one scene at once.
+    draft = edit_scene(source, FLAT, temporary(folder / "draft.pbrt"), lo=LO, hi=HI, resolution=resolution,
                        pixel_sampler="sobol", dark=dark)
     size = resolution if isinstance(resolution, tuple) else \
         tuple(max(1, round(v * (resolution or 1.0))) for v in DEFAULT_FILM)
@@ -265,7 +268,9 @@ def copy_scene(source: str | Path, folder: str | Path, resolution: tuple[int, in
         draft.unlink()
     path = folder / "scene.pbrt"
     if not path.is_file() or path.read_text() != text:  # unchanged: its renders stay valid
-        path.write_text(text)
+        tmp = temporary(path)
+        tmp.write_text(text)
+        os.replace(tmp, path)
     return path
 
 

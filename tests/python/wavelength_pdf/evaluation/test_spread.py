@@ -232,3 +232,17 @@ def test_the_spread_is_each_paths_own_and_sees_light_off_coloured_walls(tmp_path
             got["seed pair"] = _red_green(tr, transfer.spread_of(a, b, sh, sh)[tr.mask] * tr.scale ** 2).mean()
     assert got["coloured"] > 20 * abs(got["grey"]), got
     assert got["coloured"] > 20 * abs(got["seed pair"]), got
+
+
+def test_a_scene_copied_by_several_at_once_is_whole_and_leaves_no_draft(tmp_path):
+    """Two processes may copy one scene into one folder at once (the benchmark's tables made in
+    parallel): every copy returns, the copy is the one a lone copy writes, and no draft is left."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    scene = tmp_path / "s.pbrt"
+    scene.write_text(WALLS.replace("LEFT", "0.8 0.05 0.05").replace("RIGHT", "0.05 0.8 0.05"))
+    alone = transfer.copy_scene(scene, tmp_path / "alone", (12, 12)).read_text()
+    with ThreadPoolExecutor(8) as pool:
+        copies = list(pool.map(lambda _: transfer.copy_scene(scene, tmp_path / "shared", (12, 12)), range(32)))
+    assert {c.read_text() for c in copies} == {alone}
+    assert sorted(p.name for p in (tmp_path / "shared").iterdir()) == ["scene.pbrt"]
