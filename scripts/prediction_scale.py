@@ -66,9 +66,12 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     lines = []
+    transfers = {}  # loading one is seconds (its spread): once per scene
     with progress.bar(total=len(jobs), desc="prediction scale", unit="job", file=sys.stderr) as bar:
         for scene, lamp in jobs:
-            tr = scene_transfer(scene, a.outdir, a.shared, a.pbrt, spread=True)
+            if scene not in transfers:
+                transfers[scene] = scene_transfer(scene, a.outdir, a.shared, a.pbrt, spread=True)
+            tr = transfers[scene]
             spectrum = load_spectrum(G.LAMPS[lamp].spec(a.shared), lo=380.0, hi=780.0)
             folder = a.outdir / "jobs" / scene / lamp / "sobol"
             for spp in a.spp:

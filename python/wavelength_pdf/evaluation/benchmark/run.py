@@ -223,20 +223,35 @@ def _made_by(row: str, p: JobPlan) -> tuple[object | None, str]:
     return None, OPTIMIZED[row]
 
 
+def image_transfer_key(p: JobPlan) -> object:
+    """What :func:`image_transfer` depends on: jobs with equal keys share one transfer."""
+    return p.job.scene.key if p.job.resolution is None else p.outdir
+
+
+def image_transfer(p: JobPlan, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None):
+    """The transfer (with each pixel's spread) the job's :data:`~.grid.IMAGE` tables are chosen
+    from: the scene's at its benchmark size (``out/transfer/SCENE``, rendered once), or for a
+    job of a size of its own its copy's (its lamp replaced by a flat one)."""
+    from wavelength_pdf.evaluation import transfer
+    from wavelength_pdf.evaluation.benchmark.predict import scene_transfer
+
+    if p.job.resolution is None:
+        return scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True)
+    return transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True)
+
+
 def image_table(p: JobPlan, spp: int, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
-                say: Callable[[str], None] = lambda m: None) -> Path:
+                say: Callable[[str], None] = lambda m: None, tr=None) -> Path:
     """Write the job's :data:`~.grid.IMAGE` table for ``spp``: ``wavelength-pdf choose --spp
     SPP``'s best with ``--polish --spread`` (:func:`wavelength_pdf.evaluation.choose.for_image`),
     its candidates the simple samplers and the job's J table (``optimized``, made first), from
-    the scene's transfer at its benchmark size (``out/transfer/SCENE``, rendered once)."""
-    from wavelength_pdf.evaluation import choose, transfer
-    from wavelength_pdf.evaluation.benchmark.predict import scene_transfer
+    ``tr``, the job's :func:`image_transfer` (None: loaded here; loading it is seconds, so a
+    caller making many tables passes it)."""
+    from wavelength_pdf.evaluation import choose
     from wavelength_pdf.table import Table
 
-    if p.job.resolution is None:
-        tr = scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True)
-    else:  # a size of its own: the transfer of the job's copy (its lamp is replaced by a flat one)
-        tr = transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True)
+    if tr is None:
+        tr = image_transfer(p, out, shared, pbrt)
     given = {"optimized": read_table(p.tables["optimized"])} if "optimized" in p.tables else {}
     preds = choose.for_image(p.spectrum, tr, spp, given, say=say)
     best = preds[0]
@@ -291,9 +306,13 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
                 raise ValueError(f"the {G.IMAGE} row needs the benchmark's folder (out)")
             from wavelength_pdf import aot
 
+            # One transfer loaded at a time (a spread is large), for the jobs that share it.
+            key, tr = None, None
             with progress.bar(total=len(image), desc=G.IMAGE, file=sys.stderr, unit="table") as bar:
                 for p, spp in image:
-                    image_table(p, spp, out, shared, pbrt)
+                    if image_transfer_key(p) != key:
+                        key, tr = image_transfer_key(p), image_transfer(p, out, shared, pbrt)
+                    image_table(p, spp, out, shared, pbrt, tr=tr)
                     aot.clear_memory()  # each choice compiles for its own shapes
                     bar.update(1)
         futures = []
