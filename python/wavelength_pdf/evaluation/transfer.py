@@ -279,13 +279,14 @@ def render(scene_file: Path, pbrt: Path | None = None, spp: int = SPP, nthreads:
            wavelength_seed: int | None = None) -> Path:
     """Render the transfer scene to ``name`` beside it (once: an image newer than the scene
     and the renderer is kept), with ``wavelength_seed`` as ``--wavelength-seed``."""
+    from wavelength_pdf.evaluation.render import temporary
     from wavelength_pdf.renderer import find_pbrt
 
     exr = scene_file.with_name(name)
     binary = find_pbrt(pbrt)
     if exr.is_file() and exr.stat().st_mtime >= max(scene_file.stat().st_mtime, binary.stat().st_mtime):
         return exr  # made from this scene by this renderer
-    tmp = exr.with_name(exr.stem + ".tmp.exr")
+    tmp = temporary(exr)  # of its own, as copy_scene's: two processes may render one image at once
     cmd = [str(binary), "--quiet", "--spp", str(spp), "--seed", str(seed), "--outfile", str(tmp),
            *(["--wavelength-repeats", str(repeats)] if repeats > 1 else []),
            *(["--wavelength-seed", str(wavelength_seed)] if wavelength_seed is not None else []),
