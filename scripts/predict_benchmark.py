@@ -53,6 +53,9 @@ def main(argv=None) -> int:
                     help="with --colours pixels: each pixel's spread (the spectra its samples see, from two "
                          "renders of an 8x finer copy, the same paths at independent wavelengths) in place of its incoherence (wavelength_pdf.evaluation."
                          "transfer.spread)")
+    ap.add_argument("--net", action="store_true",
+                    help="with --spread: the benchmark was rendered with --wavelength-net, which stratifies the "
+                         "spread between a pixel's cells (design §6.8)")
     ap.add_argument("--only", nargs="+", default=None, metavar="PREFIX", help="only jobs whose name starts so")
     ap.add_argument("--pool", type=Path, nargs="+", default=None, metavar="CSV",
                     help="render and predict nothing: print the Spearman table over the pairs of these "
@@ -69,6 +72,8 @@ def main(argv=None) -> int:
     problems = []
     if a.spread and a.colours != "pixels":
         problems.append("--spread needs --colours pixels (it is a property of each pixel)")
+    if a.net and not a.spread:
+        problems.append("--net models the spread's cells: it needs --spread")
     if not results.is_file():
         problems.append(f"no results file {results}")
     if not (a.outdir / "tables").is_dir():
@@ -101,7 +106,7 @@ def main(argv=None) -> int:
                 f"(several kinds: not one lamp times the scene's transfer): {', '.join(own)}")
             jobs = [j for j in jobs if j.lamp != "own"]
     recs = BP.predict_jobs(rows, jobs, a.spp, a.candidates, a.colours, say, out=a.outdir, pbrt=a.pbrt,
-                           spread=a.spread)
+                           spread=a.spread, net=a.net)
     BP.add_floor(recs, [f.split("+")[0] for f in BP.FLOORED if f.split("+")[0] in a.candidates],
                  fit=a.colours != "pixels")
     cands = [*a.candidates, *(f for f in BP.FLOORED if f.split("+")[0] in a.candidates)]

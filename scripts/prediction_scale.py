@@ -44,6 +44,9 @@ def main(argv=None) -> int:
     ap.add_argument("--scenes", nargs="+", default=None, help="scenes (default: every lamp-sweep scene in the results)")
     ap.add_argument("--spp", type=int, nargs="+", default=[16, 64], help="sample counts (default 16 64)")
     ap.add_argument("--pbrt", type=Path, default=None, help="the renderer (default: as design §7)")
+    ap.add_argument("--net", action="store_true",
+                    help="the benchmark was rendered with --wavelength-net: the spread between a pixel's cells "
+                         "counts as stratified (design §6.8)")
     ap.add_argument("--csv", type=Path, default=None, help="write every job's figures here")
     a = ap.parse_args(argv)
 
@@ -70,7 +73,7 @@ def main(argv=None) -> int:
     with progress.bar(total=len(jobs), desc="prediction scale", unit="job", file=sys.stderr) as bar:
         for scene, lamp in jobs:
             if scene not in transfers:
-                transfers[scene] = scene_transfer(scene, a.outdir, a.shared, a.pbrt, spread=True)
+                transfers[scene] = scene_transfer(scene, a.outdir, a.shared, a.pbrt, spread=True, net=a.net)
             tr = transfers[scene]
             spectrum = load_spectrum(G.LAMPS[lamp].spec(a.shared), lo=380.0, hi=780.0)
             folder = a.outdir / "jobs" / scene / lamp / "sobol"

@@ -85,7 +85,10 @@ def pixel_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: 
     S = E[C C'] across every colour and channel and m_i its strata's integrals of C, as
     :func:`stratified_value` for one colour (S's diagonal takes the exact part);
     O = 4 ∫ f f' / M dλ - c c', one path that kept one wavelength, whose weighted
-    integral ``dispersed`` = ∫ f' W_1 f / M is exact (``second_moment``).
+    integral ``dispersed`` = ∫ f' W_1 f / M is exact (``second_moment``). With the spread's
+    parts that ``pbrt --wavelength-net`` stratifies (``pixel_wk``), each adds
+    tr(W_k (S - n_k sum_j m_kj m_kj')) / N, C(u)'s covariance within n_k = 2^k strata, whose
+    integrals m_kj are sums of the N strata's.
     """
     K = C.shape[0]
     Cf = jnp.moveaxis(C, 0, 1).reshape(-1, 3 * K)  # (points, K * 3), colour-major
@@ -95,6 +98,10 @@ def pixel_value(arr: dict, u: Array, wt: Array, C: Array, D: Array, diag_exact: 
     c = arr["c"].reshape(-1)
     V = (jnp.sum(arr["pixel_ws"] * (S / n - m.T @ m)) + jnp.sum(arr["pixel_wi"] * (S - jnp.outer(mean, mean))) / n
          + 4.0 * dispersed - c @ arr["pixel_w1"] @ c)
+    for k in range(arr["pixel_wk"].shape[0] if "pixel_wk" in arr else 0):  # static: unrolled
+        nk = 2 ** (k + 1)
+        mk = m.reshape(nk, n // nk, -1).sum(axis=1)
+        V = V + jnp.sum(arr["pixel_wk"][k] * (S - nk * mk.T @ mk)) / n
     return jnp.sqrt(jnp.maximum(n * V, 0.0))
 
 

@@ -247,7 +247,7 @@ def kinds_basis(spectra: list, hats, grid: np.ndarray):
 @float64
 def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarray, spp: int, *,
                    incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
-                   spread: np.ndarray | None = None) -> tuple[Problem, Spectrum]:
+                   spread: np.ndarray | None = None, cells=None) -> tuple[Problem, Spectrum]:
     """The ``pixels`` objective's problem (design §4.6) on the table ``grid`` for the pixels of
     :func:`optimize_for_pixels` (its arguments), and the lamp it is built on: ``spectrum``, or
     for several kinds of light their sum (:func:`kinds_basis`)."""
@@ -265,7 +265,7 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
         spectrum = spectra[0]
         lit, basis = lit_basis(spectrum, hats, float(grid[0]), float(grid[-1]))
     else:
-        if spread is not None:
+        if spread is not None or cells is not None:
             raise ValueError("a measured spread is one kind of light's; several kinds have their own (kinds_spread)")
         spectrum, basis, lit, own_y = kinds_basis(spectra, hats, grid)
     problem = make_problem(spectrum, grid, basis)
@@ -279,7 +279,11 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
         if spread.shape != (t.shape[0], centres.size, centres.size):
             raise ValueError(f"spread must be ({t.shape[0]}, {centres.size}, {centres.size}), not {spread.shape}")
         spread = spread[:, lit][:, :, lit]
-    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated, spread)
+        if cells is not None:
+            cells = tuple((key, np.asarray(c, dtype=np.float64)[:, lit][:, :, lit]) for key, c in cells)
+    elif cells is not None:
+        raise ValueError("cells are parts of a spread: give the spread too")
+    W = pixel_weights(problem.c, t[:, lit], spp, incoherence, terminated, spread, cells)
     problem = with_objective(problem, "pixels", spp, W)
     return problem, spectrum
 
@@ -287,7 +291,7 @@ def pixels_problem(spectrum, grid: np.ndarray, t: np.ndarray, centres: np.ndarra
 @float64
 def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres: np.ndarray, spp: int, *,
                         incoherence: np.ndarray | None = None, terminated: np.ndarray | None = None,
-                        spread: np.ndarray | None = None, share: tuple[float, Table] | None = None,
+                        spread: np.ndarray | None = None, cells=None, share: tuple[float, Table] | None = None,
                         max_evaluations: int = REFINE_EVALUATIONS,
                         progress: Callable[[int, float], None] | None = None) -> Result:
     """Polish ``table`` (e.g. the lamp's J table, or its emission table) on its own grid for
@@ -296,7 +300,8 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     spectral transfers are ``t`` (P, B) at the hat basis' ``centres``
     (:mod:`wavelength_pdf.evaluation.transfer`, in the image's units), with their
     ``incoherence`` and dispersed share ``terminated`` (:func:`wavelength_pdf.predict.pixel_de2`),
-    or their ``spread`` (P, B, B) in place of the incoherence. ``spectrum`` may be a list of J
+    or their ``spread`` (P, B, B) in place of the incoherence, with ``cells`` its parts that
+    ``pbrt --wavelength-net`` stratifies (:func:`wavelength_pdf.predict.pixel_de2`). ``spectrum`` may be a list of J
     kinds of light, ``t`` then (P, J B) each pixel's transfers along each kind's own paths side
     by side (:func:`wavelength_pdf.evaluation.transfer.kind_transfers`, as
     :func:`~wavelength_pdf.evaluation.choose.wavelength_error` takes them; :func:`kinds_basis`),
@@ -323,7 +328,7 @@ def optimize_for_pixels(spectrum: Spectrum, table: Table, t: np.ndarray, centres
     enable_compilation_cache()
     grid = np.asarray(table.grid, dtype=np.float64)
     problem, spectrum = pixels_problem(spectrum, grid, t, centres, spp, incoherence=incoherence,
-                                       terminated=terminated, spread=spread)
+                                       terminated=terminated, spread=spread, cells=cells)
     if share is not None:
         S, D = share
         problem = with_share(problem, S, [np.interp(grid, D.grid, d, left=0.0, right=0.0) for d in D.pdfs])

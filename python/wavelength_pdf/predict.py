@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -381,7 +381,8 @@ def _one_wavelength_terms(lam: np.ndarray, w: np.ndarray, q: np.ndarray, spectru
 def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "sobol",
               metric: str = "de2000", incoherence: np.ndarray | None = None,
               terminated: np.ndarray | None = None, one_wavelength: np.ndarray | None = None,
-              spread: np.ndarray | None = None) -> np.ndarray:
+              spread: np.ndarray | None = None,
+              cells: Sequence[tuple[tuple[int, int], np.ndarray]] | None = None) -> np.ndarray:
     """Per pixel, the linearised squared error of its mean of ``spp`` samples (the
     ``covariance`` candidate) for pixels whose spectrum is T_p = sum_b t[p, b] φ_b: ``pc`` is
     the table's path colours for the basis of :func:`hat_basis` (K = B). A pixel's colour is
@@ -401,6 +402,14 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     spectrum of varying magnitude). It takes the place of r t_p t_p' in the middle term, which
     is its case of one spectrum: sum_bc S_bc Cov_u(C_b, C_c) / N, its relative size capped at
     N as r is.
+
+    ``cells`` (((i, j), V_ij), ...), each V_ij (P, B, B) the part of the spread between the
+    pixel's 2^i x 2^j cells of equal filter weight along y and x
+    (:func:`.evaluation.transfer.cell_spread_of`), for every i, j up to some L but (0, 0) and
+    (L, L): for a render with ``pbrt --wavelength-net``, which draws u together with the film
+    position (design §5.2) as a (1, m, 3)-net, so that the samples in a cell have stratified u
+    among themselves. Each level's part then takes the covariance of C(u) within 2^k strata,
+    k = m - 1 - i - j, in place of Cov_u(C) (:func:`_net_levels`); ``spread`` is needed with it.
 
     ``terminated`` (P,): the share of each pixel's light carried by paths that kept one
     wavelength (a dispersive surface), with ``one_wavelength`` the basis' covariance of such a
@@ -437,9 +446,13 @@ def pixel_de2(pc: PathColours, t: np.ndarray, spp: int, pixel_sampler: str = "so
     # error (which would grow with r without bound while the CIEDE2000 of such pixels does not).
     r = np.minimum(per_pixel("incoherence", incoherence), spp) if incoherence is not None else 0.0
     spread_cov = 0.0
+    if cells is not None and spread is None:
+        raise ValueError("cells are parts of a spread: give the spread too")
     if spread is not None:
-        spread_cov = np.einsum("pbc,bicj->pij", _capped_spread(spread, t, spp, pc.target[:, 1]),
-                               basis_covariance(pc, spp, "independent"), optimize=True)
+        cap = _spread_cap(spread, t, spp, pc.target[:, 1])
+        spread_cov = sum(np.einsum("pbc,bicj->pij", cap * part, level_covariance(pc, n, spp), optimize=True)
+                         for part, n in _net_levels(np.asarray(spread, dtype=np.float64), cells, spp,
+                                                    pixel_sampler))
     elif incoherence is not None:
         cov = cov + r * quad(basis_covariance(pc, spp, "independent"))
     share = 0.0
@@ -494,18 +507,77 @@ def kinds_spread(t: np.ndarray, y: np.ndarray, kind_of: np.ndarray,
     return S
 
 
-def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int, y: np.ndarray) -> np.ndarray:
-    """The spread (P, B, B), checked, each pixel's scaled down where the relative variance of
-    its samples' luminance, y' S y / (t · y)^2 (r for one spectrum; y the basis' luminances),
-    exceeds N (:func:`pixel_de2`). In luminance, not in the coefficients, so that the cap does
-    not depend on the basis functions' units (a kinds' problem scales each kind's)."""
+def _spread_cap(spread: np.ndarray, t: np.ndarray, spp: int, y: np.ndarray) -> np.ndarray:
+    """(P, 1, 1): the factor that scales each pixel's spread (P, B, B), checked, down where the
+    relative variance of its samples' luminance, y' S y / (t · y)^2 (r for one spectrum; y the
+    basis' luminances), exceeds N (:func:`pixel_de2`). In luminance, not in the coefficients,
+    so that the cap does not depend on the basis functions' units (a kinds' problem scales
+    each kind's)."""
     S = np.asarray(spread, dtype=np.float64)
     P, B = t.shape
     if S.shape != (P, B, B) or not np.all(np.isfinite(S)):
         raise ValueError(f"spread must be ({P}, {B}, {B}) finite values, not {S.shape}")
     y = np.asarray(y, dtype=np.float64)
     rel = np.einsum("b,pbc,c->p", y, S, y) / np.maximum((t @ y) ** 2, 1e-300)
-    return S * np.minimum(1.0, spp / np.maximum(rel, 1e-300))[:, None, None]
+    return np.minimum(1.0, spp / np.maximum(rel, 1e-300))[:, None, None]
+
+
+def _capped_spread(spread: np.ndarray, t: np.ndarray, spp: int, y: np.ndarray) -> np.ndarray:
+    """The spread (P, B, B) capped as :func:`_spread_cap` says."""
+    return np.asarray(spread, dtype=np.float64) * _spread_cap(spread, t, spp, y)
+
+
+def _net_levels(spread: np.ndarray, cells, spp: int, pixel_sampler: str = "sobol"):
+    """[(part (P, B, B), n)]: the spread cut into the parts of :func:`pixel_de2`'s ``cells``,
+    each with the number n of equal strata of u within which C(u)'s covariance is left
+    (:func:`level_covariance`; None: unstratified, Cov_u(C) / N); without cells, the whole
+    spread, unstratified.
+
+    ``cells`` gives V(i, j), the spread between a pixel's 2^i x 2^j cells, for every i, j up to
+    some L but (0, 0) (none) and (L, L) (the spread itself). The part of level (i, j) exactly,
+    V(i, j) - V(i-1, j) - V(i, j-1) + V(i-1, j-1), times a function of u varies over boxes of
+    2^i x 2^j x 2^k; a scrambled (t, m, 3)-net integrates every such part with i + j + k <= m - t
+    exactly (Owen's gain coefficients vanish there), so with t = 1 only the part of C(u) within
+    2^k strata, k = m - 1 - i - j, is left: Cov_u(C) less the covariance of the strata's means,
+    2^k times :func:`basis_covariance` at 2^k, over N. The finest level (L, L) holds each
+    path's own difference and stays unstratified."""
+    if cells is None:
+        return [(spread, None)]
+    if pixel_sampler != "sobol":
+        raise ValueError("cells model the low-discrepancy pixel sampler with pbrt --wavelength-net")
+    V = {}
+    for key, v in cells:
+        v = np.asarray(v, dtype=np.float64)
+        if v.shape != spread.shape or not np.all(np.isfinite(v)):
+            raise ValueError(f"each of the cells must be a finite {spread.shape} array")
+        V[tuple(key)] = v
+    L = max((max(k) for k in V), default=0)
+    if L < 1 or set(V) != {(i, j) for i in range(L + 1) for j in range(L + 1) if 0 < i + j < 2 * L}:
+        raise ValueError("cells must be every level (i, j) up to some L >= 1 but (0, 0) and (L, L)")
+    V[(0, 0)], V[(L, L)] = np.zeros_like(spread), spread
+    m = int(spp).bit_length() - 1
+
+    def at(i, j):
+        return V[(i, j)] if i >= 0 and j >= 0 else 0.0
+
+    parts = []
+    for (i, j) in sorted(V):
+        if (i, j) == (0, 0):
+            continue
+        part = at(i, j) - at(i - 1, j) - at(i, j - 1) + at(i - 1, j - 1)
+        k = m - 1 - i - j
+        parts.append((part, None if (i, j) == (L, L) or k < 1 else 2 ** k))
+    return parts
+
+
+def level_covariance(pc: PathColours, n: int | None, spp: int) -> np.ndarray:
+    """(B, 3, B, 3): C(u)'s covariance within n equal strata of u (averaged over them) over N =
+    ``spp``, n times :func:`basis_covariance` at n; None: the whole covariance over N. A part
+    of a pixel's spread that the net integrates over every coarser stratum (:func:`_net_levels`)
+    adds its quadratic form with this."""
+    if n is None:
+        return basis_covariance(pc, spp, "independent")
+    return (n / spp) * basis_covariance(pc, n, "sobol")
 
 
 def path_de2(xyz: np.ndarray, incoherence: np.ndarray, spp: int, metric: str = "de2000") -> np.ndarray:
@@ -575,7 +647,8 @@ def xyz_metrics(xyz: np.ndarray, jac: np.ndarray | None = None) -> np.ndarray:
 
 
 def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.ndarray | None = None,
-                  terminated: np.ndarray | None = None, spread: np.ndarray | None = None) -> np.ndarray:
+                  terminated: np.ndarray | None = None, spread: np.ndarray | None = None,
+                  cells: Sequence[tuple[tuple[int, int], np.ndarray]] | None = None) -> np.ndarray:
     """The weights (3, B*3, B*3) with which :func:`pixel_de2`'s mean over the pixels is linear in
     the basis' covariances (design §4.6, ``pixels``): W_s, W_i, W_1 with
 
@@ -587,7 +660,11 @@ def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.n
     contributes t_p t_p' ⊗ A_p (A_p, :func:`xyz_metrics` at its colour t_p · target) times
     (1 − s)², (1 − s)² r and s² (1 + r) / N, r its incoherence capped at N and s its
     dispersed share, as in :func:`pixel_de2`; with ``spread``, W_i's pixel term is
-    (1 − s)² S_p ⊗ A_p instead. The metric at each pixel's colour depends on
+    (1 − s)² S_p ⊗ A_p instead. With ``cells`` too (:func:`pixel_de2`) the spread's parts
+    that the net stratifies go to weights of their own: the result is then (2 + m, B*3, B*3)
+    for N = 2^m, entry 2 + k (k = 1 … m − 1) weighting C(u)'s covariance within 2^k strata,
+    N · :func:`level_covariance` at 2^k (0 where no part falls). The metric at each pixel's
+    colour depends on
     the lamp and the scene, not on the table, so an optimizer can minimise the image's
     predicted error through three fixed matrices, whatever the number of pixels."""
     t = np.atleast_2d(np.asarray(t, dtype=np.float64))
@@ -607,10 +684,20 @@ def pixel_weights(target: np.ndarray, t: np.ndarray, spp: int, incoherence: np.n
     def outer(w):
         return np.einsum("p,pb,pc,pij->bicj", w / P, t, t, A, optimize=True)
 
-    # The unstratified term: each pixel's spread, or its one spectrum's r t t'.
-    middle = (np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, _capped_spread(spread, t, spp, target[:, 1]), A,
-                        optimize=True) if spread is not None else outer((1 - s) ** 2 * r))
-    W = [outer((1 - s) ** 2), middle, outer(s ** 2 * (1 + r) / spp)]
+    def spread_weight(part):
+        return np.einsum("p,pbc,pij->bicj", (1 - s) ** 2 / P, part, A, optimize=True)
+
+    # The unstratified term: each pixel's spread (what the net does not stratify of it), or its
+    # one spectrum's r t t'.
+    levels = {}
+    if spread is not None:
+        cap = _spread_cap(spread, t, spp, target[:, 1])
+        for part, n in _net_levels(np.asarray(spread, dtype=np.float64), cells, spp):
+            levels[n] = levels.get(n, 0.0) + spread_weight(cap * part)
+    middle = levels.pop(None, 0.0) if spread is not None else outer((1 - s) ** 2 * r)
+    W = [outer((1 - s) ** 2), np.broadcast_to(middle, (B, 3, B, 3)), outer(s ** 2 * (1 + r) / spp)]
+    if cells is not None:
+        W += [levels.get(2 ** k, np.zeros((B, 3, B, 3))) for k in range(1, int(spp).bit_length() - 1)]
     return np.stack([w.reshape(B * 3, B * 3) for w in W])
 
 

@@ -447,7 +447,7 @@ def with_objective(problem: Problem, objective: str = "J", spp: int = DEFAULT_OB
     :func:`wavelength_pdf.predict.pixel_weights`, made for that spp.
     """
     check_objective(objective, spp)
-    drop = ("strata", "strata_metric", "pixel_ws", "pixel_wi", "pixel_w1")
+    drop = ("strata", "strata_metric", "pixel_ws", "pixel_wi", "pixel_w1", "pixel_wk")
     arrays = {k: v for k, v in problem.arrays.items() if k not in drop}
     if objective == "J":
         return replace(problem, arrays=arrays, objective="J", spp=1)
@@ -455,11 +455,16 @@ def with_objective(problem: Problem, objective: str = "J", spp: int = DEFAULT_OB
     if objective == "pixels":
         pixels = problem.pixels if pixels is None else np.asarray(pixels, dtype=np.float64)
         k = problem.refl.shape[0] if problem.batched else 0
-        if pixels is None or not problem.batched or pixels.shape != (3, 3 * k, 3 * k):
+        levels = spp.bit_length() - 2  # with the net's cells: one weight per 2^k strata, k = 1 … m - 1
+        if (pixels is None or not problem.batched or pixels.shape[1:] != (3 * k, 3 * k)
+                or pixels.shape[0] not in (3, 3 + max(levels, 0))):
             raise ValueError("the pixels objective needs a hat basis as surface colours and its weights "
-                             f"(3, {3 * k}, {3 * k}) (wavelength_pdf.predict.pixel_weights)")
+                             f"(3, {3 * k}, {3 * k}), or (3 + {max(levels, 0)}, ...) with the net's cells "
+                             "(wavelength_pdf.predict.pixel_weights)")
         extra = {"strata": np.arange(1, spp, dtype=np.float64) / spp, "pixel_ws": pixels[0],
                  "pixel_wi": pixels[1], "pixel_w1": pixels[2]}
+        if pixels.shape[0] > 3 and levels > 0:
+            extra["pixel_wk"] = pixels[3:]
         arrays.update(jax.device_put(extra))
         return replace(problem, arrays=arrays, objective=objective, spp=spp, pixels=pixels)
     c = np.atleast_2d(problem.c)

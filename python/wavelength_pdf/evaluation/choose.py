@@ -78,7 +78,9 @@ def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pi
     (:func:`.transfer.kind_transfers`): each pixel is then lit by every kind along that kind's
     own paths, sum_j E_j t_pj, each sample carrying one kind's light
     (:func:`wavelength_pdf.predict.kinds_spread`); ``tr``'s spread, where it has one, counts
-    for one kind of light."""
+    for one kind of light. Where ``tr`` has the spread's cells (images rendered with ``pbrt
+    --wavelength-net``, :func:`.transfer.of_file`), the part of the spread between them counts
+    as stratified (:func:`wavelength_pdf.predict.pixel_de2`)."""
     from wavelength_pdf import predict as P
 
     spectra = list(spectrum) if isinstance(spectrum, (list, tuple)) else [spectrum]
@@ -90,10 +92,11 @@ def wavelength_error(table, spectrum, basis, tr: transfer.Transfer, spp: int, pi
     r = tr.incoherence[pixels]
     if kinds is not None:
         spread = P.kinds_spread(t, pc.target[:, 1], np.repeat(np.arange(len(spectra)), len(basis.labels)), r)
+        cells = None
     else:
-        spread = None if tr.spread is None else tr.spread[pixels]
+        spread, cells = tr.spread_at(pixels)
     return float(np.mean(P.pixel_de2(pc, t, spp, pixel_sampler, incoherence=r, terminated=tr.terminated[pixels],
-                                     one_wavelength=one, spread=spread)))
+                                     one_wavelength=one, spread=spread, cells=cells)))
 
 
 #: The prefix of a polished candidate's name: "polished spd" is the ``spd`` table polished.
@@ -113,7 +116,8 @@ def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[s
                     what: str = "the scene's pixels") -> dict[str, object]:
     """Each of ``tables`` polished for ``tr``'s pixels (those ``pixels`` selects) at ``spp`` by
     the ``pixels`` objective (:func:`wavelength_pdf.optimize.optimize_for_pixels`, design §4.6:
-    the low-discrepancy pixel sampler's strata, with ``tr``'s spread where it has one), named
+    the low-discrepancy pixel sampler's strata, with ``tr``'s spread and its cells where it has
+    them), named
     "polished NAME". ``spectrum`` may be a list of kinds of light with ``kinds`` (J, P, B) their
     transfers, each pixel lit by every kind along its own paths (as :func:`wavelength_error`;
     with their spread). ``share``: (S, D), each table polished as it is sampled with the share S
@@ -131,7 +135,7 @@ def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[s
     from wavelength_pdf.optimize import optimize_for_pixels
 
     t = side_by_side(tr, kinds, pixels)
-    spread = None if tr.spread is None or kinds is not None else tr.spread[pixels]
+    spread, cells = tr.spread_at(pixels) if kinds is None else (None, None)
     budget = {} if max_evaluations is None else {"max_evaluations": max_evaluations}
     out = {}
     for name, table in tables.items():
@@ -141,7 +145,7 @@ def polished_tables(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[s
             try:
                 out[f"{POLISHED} {name}"] = optimize_for_pixels(
                     spectrum, start, t, tr.centres, spp, incoherence=tr.incoherence[pixels],
-                    terminated=tr.terminated[pixels], spread=spread, share=share, **budget).table
+                    terminated=tr.terminated[pixels], spread=spread, cells=cells, share=share, **budget).table
                 break
             except ValueError as e:
                 say(f"choose: {name} not polished{' as sampled' if start is not table else ''}: {e}")
@@ -206,7 +210,7 @@ def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, ob
 def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, workdir: str | Path, *,
                    pixel_sampler: str = "sobol", resolution: float | tuple[int, int] = 0.1,
                    pbrt: Path | None = None, transfer_spp: int = transfer.SPP, simple: bool = True,
-                   polish: bool = False, spread: bool = False,
+                   polish: bool = False, spread: bool = False, net: bool = False,
                    say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
     """Every candidate's predicted error in ``scene`` at ``spp``, best first.
 
@@ -215,8 +219,11 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
     samplers, ``polish`` the polished tables of :func:`for_image`. ``spread``: each pixel's
     spread (:func:`.transfer.spread`, the spectra its samples see) in place of its
     incoherence; it is a property of the pixels you render, so give ``resolution`` 1 (the
-    scene's own film) or the size you render at. The renders go to ``workdir`` and are kept
-    while the scene and the renderer are unchanged."""
+    scene's own film) or the size you render at; with ``net`` (you render with ``pbrt
+    --wavelength-net``) the part of it that the net stratifies counts as stratified. The renders
+    go to ``workdir`` and are kept while the scene and the renderer are unchanged."""
+    if net and not spread:
+        raise ValueError("net models the spread's cells: give spread too")
     check_spp(spp, pixel_sampler)
     spectrum = transfer.one_kind(scene)
     if not (simple or tables or polish):
@@ -224,5 +231,5 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
     size = resolution if isinstance(resolution, tuple) else f"{resolution:g} of its size"
     say(f"choose: the scene's transfer ({transfer_spp} spp) and incoherence (2 x {transfer.INCOHERENCE_SPP} spp) "
         f"at {size}" + (", with each pixel's spread" if spread else "") + f", in {workdir}")
-    tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp, with_spread=spread)
+    tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp, with_spread=spread, net=net)
     return for_image(spectrum, tr, spp, tables, simple=simple, polish=polish, pixel_sampler=pixel_sampler, say=say)

@@ -74,6 +74,16 @@ class Transfer:
     #: (P, B, B) or None: each pixel's spread (:func:`spread`), the covariance of the
     #: spectra its samples see, in the units of ``t``.
     spread: np.ndarray | None = None
+    #: None, or for each (i, j) of :func:`net_cells` ((i, j), (P, B, B)): the part of the
+    #: spread that lies between the pixel's 2^i x 2^j cells of equal filter weight (along y and
+    #: x; :func:`cell_spread_of`), some of which ``pbrt --wavelength-net`` stratifies
+    #: (:func:`wavelength_pdf.predict.pixel_de2`).
+    cells: tuple[tuple[tuple[int, int], np.ndarray], ...] | None = None
+
+    def spread_at(self, pixels: np.ndarray | slice = slice(None)):
+        """(spread, cells) of the pixels ``pixels`` selects, each None where not measured."""
+        return (None if self.spread is None else self.spread[pixels],
+                None if self.cells is None else tuple((g, c[pixels]) for g, c in self.cells))
 
 
 #: The renders that measure each pixel's spread (:func:`spread`) cut each side of a pixel into
@@ -82,6 +92,20 @@ class Transfer:
 #: wavelengths per path).
 SPREAD_FACTOR = 8
 SPREAD_SPP = 1
+#: A pixel's filter footprint is cut into 2^i x 2^j cells of equal filter weight, i, j up to
+#: this, and the spread between them measured apart (:func:`net_cells`, :func:`cell_spread_of`):
+#: ``pbrt --wavelength-net`` draws u together with the film position, so a cell's samples have
+#: stratified u among themselves (design §5.2, §6.8). 2^NET_LEVEL is SPREAD_FACTOR: the finest
+#: cells are the sub-pixels, whose one path each is not told apart from the cell.
+NET_LEVEL = SPREAD_FACTOR.bit_length() - 1
+
+
+def net_cells(level: int = NET_LEVEL) -> tuple[tuple[int, int], ...]:
+    """The (i, j) whose spread between 2^i x 2^j cells is measured: every pair up to ``level``
+    but (0, 0) (the pixel itself: none) and (level, level) (the sub-pixels: the spread itself)."""
+    return tuple((i, j) for i in range(level + 1) for j in range(level + 1) if 0 < i + j < 2 * level)
+
+
 #: The pixel filters the spread models, with pbrt-v4's default radius of each (pixels).
 FILTER_RADII = {"gaussian": 1.5, "box": 0.5, "triangle": 2.0}
 
@@ -179,6 +203,75 @@ def spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.n
     return out
 
 
+def cell_shares(shares: np.ndarray, g: int) -> np.ndarray:
+    """(n g, N): along one axis, each pixel's shares (:func:`filter_shares`, (n, N)) cut into
+    ``g`` cells of equal filter weight: row i g + k holds the shares of pixel i's sub-pixels in
+    its cell k, a sub-pixel going whole to the cell of its centre's place in the pixel's
+    cumulative share (pbrt-v4 maps a sample's film numbers to the filter's offset monotonically,
+    one axis at a time for these separable filters, so cell k of [0, 1) is the k-th g-quantile
+    of the filter's weight)."""
+    if g < 1:
+        raise ValueError(f"cells per side must be >= 1, not {g}")
+    n, N = shares.shape
+    middle = np.cumsum(shares, axis=1) - shares / 2
+    cell = np.minimum((middle * g).astype(int), g - 1)
+    out = np.zeros((n * g, N))
+    out[np.arange(n)[:, None] * g + cell, np.arange(N)[None, :]] = shares
+    return out
+
+
+def cell_spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.ndarray,
+                   cells: tuple[int, int], spread: np.ndarray) -> np.ndarray:
+    """(h, w, B, B): the part of each pixel's ``spread`` (:func:`spread_of` of the same renders)
+    that lies between its gy x gx cells of equal filter weight (``cells``, along y and x;
+    :func:`cell_shares`): the covariance of the cells' mean spectra, sum_c W_c (T_c - T)(T_c - T)'.
+
+    The cells' means over the renders' paths are noisy themselves: their products also count
+    the paths' spread within a cell, W = S - B, over the cell's effective number of paths k_c
+    (W_c^2 / sum_q w_q^2), less the pixel mean's own, sigma W (sigma = sum_q w_q^2), which the
+    measured spread S' = B + (1 - sigma) W lacks too (:func:`spread_of`). With
+    1/k = sum_c W_c / k_c over the pixel's cells and rho = (1/k - sigma) / (1 - sigma), the
+    measured B' = B + rho (S' - B) is solved for B = (B' - rho S') / (1 - rho). One factor of
+    each product from each render, as in :func:`spread_of`."""
+    from scipy.sparse import csr_array
+
+    h, w, B = shares_y.shape[0], shares_x.shape[0], a.shape[2]
+    if spread.shape != (h, w, B, B):
+        raise ValueError(f"cell_spread_of: spread {spread.shape} against {h} x {w} pixels of {B} buckets")
+    gy, gx = cells
+    cy, cx = cell_shares(shares_y, gy), cell_shares(shares_x, gx)
+    Cy, Cx = csr_array(cy), csr_array(cx)
+
+    def cellsum(img, my=Cy, mx=Cx):  # (h gy, w gx): each cell's weighted sum
+        return np.asarray((mx @ (my @ img).T).T)
+
+    def per_pixel(x):  # (h gy, w gx, ...) summed over each pixel's cells
+        return x.reshape(h, gy, w, gx, *x.shape[2:]).sum(axis=(1, 3))
+
+    ones = np.ones(a.shape[:2])
+    weight = cellsum(ones)
+    inv = np.divide(1.0, weight, out=np.zeros_like(weight), where=weight > 0)
+    ma = np.stack([cellsum(a[..., i]) * inv for i in range(B)], axis=-1)
+    mb = np.stack([cellsum(b[..., i]) * inv for i in range(B)], axis=-1)
+    pa, pb = per_pixel(weight[..., None] * ma), per_pixel(weight[..., None] * mb)
+    prod = per_pixel(weight[..., None, None] * ma[..., :, None] * mb[..., None, :]) - pa[..., :, None] * pb[..., None, :]
+    prod = 0.5 * (prod + np.swapaxes(prod, -1, -2))
+    squares = cellsum(ones, csr_array(cy ** 2), csr_array(cx ** 2))
+    inv_k, sigma = per_pixel(squares * inv), per_pixel(squares)
+    rho = ((inv_k - sigma) / np.maximum(1.0 - sigma, 1e-12))[..., None, None]
+    return (prod - rho * spread) / np.maximum(1.0 - rho, 1e-12)
+
+
+def _spread_renders(source, folder, size, pbrt, nthreads, factor, spp):
+    """The two renders of :func:`spread` (H, W, B) and the pixel filter's shares along y and x."""
+    w, h = size
+    copy = copy_scene(source, folder, (w * factor, h * factor))
+    kind, rx, ry, sigma = pixel_filter(copy)
+    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=1, repeats=INCOHERENCE_REPEATS,
+                                 wavelength_seed=ws, name=f"spread-wavelengths{ws}.exr"))[1] for ws in (1, 2))
+    return a, b, filter_shares(h, factor, kind, ry, sigma), filter_shares(w, factor, kind, rx, sigma)
+
+
 def spread(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: Path | None = None,
            nthreads: int | None = None, factor: int = SPREAD_FACTOR, spp: int = SPREAD_SPP) -> np.ndarray:
     """(h, w, B, B): the spread of every pixel of ``source`` rendered at ``size`` (w, h)
@@ -193,12 +286,17 @@ def spread(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: 
     stratified by the pixel's u, and adds sum_bc S_bc Cov_u(C_b, C_c) / N, S the spread
     (:func:`wavelength_pdf.predict.pixel_de2`). With ``spp`` 1 each sub-pixel is one path and
     S is the paths' own covariance; with more, that of their means in a sub-pixel."""
-    w, h = size
-    copy = copy_scene(source, folder, (w * factor, h * factor))
-    kind, rx, ry, sigma = pixel_filter(copy)
-    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=1, repeats=INCOHERENCE_REPEATS,
-                                 wavelength_seed=ws, name=f"spread-wavelengths{ws}.exr"))[1] for ws in (1, 2))
-    return spread_of(a, b, filter_shares(h, factor, kind, ry, sigma), filter_shares(w, factor, kind, rx, sigma))
+    return spread_of(*_spread_renders(source, folder, size, pbrt, nthreads, factor, spp))
+
+
+def spread_with_cells(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: Path | None = None,
+                      nthreads: int | None = None, cells: Sequence[tuple[int, int]] = net_cells()):
+    """:func:`spread` and, from the same renders, for each (i, j) of ``cells``
+    ((i, j), (h, w, B, B)), the part of it that lies between the pixel's 2^i x 2^j cells
+    (:func:`cell_spread_of`)."""
+    a, b, sy, sx = _spread_renders(source, folder, size, pbrt, nthreads, SPREAD_FACTOR, SPREAD_SPP)
+    S = spread_of(a, b, sy, sx)
+    return S, tuple(((i, j), cell_spread_of(a, b, sy, sx, (2 ** i, 2 ** j), S)) for i, j in cells)
 
 
 def _spectral_film(text: str, path: Path, buckets: int, lo: float, hi: float,
@@ -334,10 +432,12 @@ def _uniform_table():
 
 def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] | float | None = None,
             pbrt: Path | None = None, spp: int = SPP, nthreads: int | None = None,
-            with_spread: bool = False) -> Transfer:
+            with_spread: bool = False, net: bool = False) -> Transfer:
     """Copy (:func:`copy_scene`), render (once: kept while the scene and the renderer are
     unchanged) and load the transfer of a scene, with its incoherence, and with
-    ``with_spread`` each pixel's spread (:func:`spread`, its renders in ``folder/spread``)."""
+    ``with_spread`` each pixel's spread (:func:`spread`, its renders in ``folder/spread``);
+    with ``net`` too (for images rendered with ``pbrt --wavelength-net``) its parts between
+    the cells of :func:`net_cells` (:func:`spread_with_cells`)."""
     scene_file = copy_scene(source, folder, resolution)
     if with_spread:
         pixel_filter(scene_file)  # a filter the spread does not model is refused before any render
@@ -347,8 +447,10 @@ def of_file(source: str | Path, folder: str | Path, resolution: tuple[int, int] 
     if not with_spread:
         return tr
     h, w = tr.mask.shape
-    S = spread(source, Path(folder) / "spread", (w, h), pbrt, nthreads)[tr.mask] * tr.scale ** 2
-    return replace(tr, spread=S)
+    S, cells = spread_with_cells(source, Path(folder) / "spread", (w, h), pbrt, nthreads,
+                                 net_cells() if net else ())
+    return replace(tr, spread=S[tr.mask] * tr.scale ** 2,
+                   cells=tuple((g, c[tr.mask] * tr.scale ** 2) for g, c in cells) if net else None)
 
 
 def kind_transfers(source: str | Path, folder: str | Path, lights: Sequence[Collection[tuple[str, int]]],

@@ -2,7 +2,8 @@
 
 - its value is the tabulated pixel prediction (``choose.wavelength_error``: the mean over the
   pixels of ``predict.pixel_de2``, with incoherence and dispersion, or with each pixel's
-  spread) computed by the objective's own quadrature, for an emission table and an optimized one,
+  spread, and its parts between cells that ``pbrt --wavelength-net`` stratifies) computed by
+  the objective's own quadrature, for an emission table and an optimized one,
   and for pixels lit by two kinds of light along their own paths, each sample carrying one
   kind's light (``kinds_spread``, checked against sampling);
 - with a fixed share of other densities mixed in (``with_share``) it is the value of the table
@@ -53,25 +54,28 @@ def scene():
 def _pixels_value(table, spectrum, tr, spp, t=None):
     """The objective's V = value^2 / N for ``table`` (``t``: the kinds' transfers side by side)."""
     problem, _ = pixels_problem(spectrum, table.grid, tr.t if t is None else t, tr.centres, spp,
-                                incoherence=tr.incoherence, terminated=tr.terminated, spread=tr.spread)
+                                incoherence=tr.incoherence, terminated=tr.terminated, spread=tr.spread,
+                                cells=tr.cells)
     return problem, objective.J(problem, table.pdfs) ** 2 / spp
 
 
-def _with_spread(tr):
+def _with_spread(tr, net=False):
     """``tr`` with a made-up spread: each pixel's samples see its spectrum and one of a
-    neighbour's, in random shares."""
+    neighbour's, in random shares; with ``net``, parts of it between cells (the more of it the
+    finer the cells, as for an edge)."""
     rng = np.random.default_rng(4)
     D = tr.t - np.roll(tr.t, 1, axis=0)
     w = rng.uniform(0, 0.5, size=len(D))
-    return transfer.Transfer(tr.centres, tr.t, tr.mask, tr.scale, tr.incoherence, tr.terminated,
-                             (w * (1 - w))[:, None, None] * D[:, :, None] * D[:, None, :])
+    S = (w * (1 - w))[:, None, None] * D[:, :, None] * D[:, None, :]
+    cells = tuple(((i, j), S * (i + j) / (2 * transfer.NET_LEVEL + 1)) for i, j in transfer.net_cells()) if net else None
+    return transfer.Transfer(tr.centres, tr.t, tr.mask, tr.scale, tr.incoherence, tr.terminated, S, cells)
 
 
-@pytest.mark.parametrize("spp,spread", [(16, False), (64, False), (64, True)])
+@pytest.mark.parametrize("spp,spread", [(16, False), (64, False), (64, True), (16, "net"), (64, "net")])
 def test_value_is_the_tabulated_pixel_prediction(fl2, scene, spp, spread):
     basis = P.hat_basis(CENTRES, LO, HI)
     if spread:
-        scene = _with_spread(scene)
+        scene = _with_spread(scene, net=spread == "net")
     for table in (stratified.stratified_table(fl2, "spd", LO, HI), stratified.stratified_table(fl2, "xyz", LO, HI)):
         want = wavelength_error(table, fl2, basis, scene, spp)
         _, got = _pixels_value(table, fl2, scene, spp)
@@ -128,9 +132,10 @@ def test_dispersion_and_incoherence_count(fl2, scene):
 
 
 @float64
-def test_gradient_agrees_with_finite_differences(fl2, scene):
+@pytest.mark.parametrize("net", [False, True])
+def test_gradient_agrees_with_finite_differences(fl2, scene, net):
     table = stratified.stratified_table(fl2, "xyz", LO, HI)
-    problem, _ = _pixels_value(table, fl2, scene, 64)
+    problem, _ = _pixels_value(table, fl2, _with_spread(scene, net=True) if net else scene, 64)
     vg = objective.value_and_grad(problem)
     Pm = np.asarray(table.pdfs, dtype=np.float64)
     val, grad = vg(Pm)

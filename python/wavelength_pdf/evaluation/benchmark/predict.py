@@ -135,13 +135,15 @@ PIXEL_CANDIDATES = ("covariance", "covariance-lab")
 def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Sequence[int] = (16, 64),
                  candidates: Sequence[str] = CANDIDATES, colours: str = "white",
                  say: Callable[[str], None] = lambda m: None, out: Path | None = None,
-                 pbrt: Path | None = None, spread: bool = False) -> list[dict]:
+                 pbrt: Path | None = None, spread: bool = False, net: bool = False) -> list[dict]:
     """One record per (job, spp, row incl. the table): the measured de2 and floor, and each
     candidate's prediction (white-surface units). C(u) is tabulated once per lamp, table and
     colour set, and shared by every job and spp that uses it. ``colours`` is one of
     :data:`COLOURS`; ``scene`` reads each job's scene copy under ``out`` with ``pbrt``;
     ``spread`` (``pixels`` only): each pixel's spread in place of its incoherence
-    (:func:`wavelength_pdf.evaluation.transfer.spread`)."""
+    (:func:`wavelength_pdf.evaluation.transfer.spread`); ``net`` (with it): the images were
+    rendered with ``pbrt --wavelength-net``, which stratifies the spread between a pixel's
+    cells (:func:`wavelength_pdf.predict.pixel_de2`)."""
     from wavelength_pdf import predict as P
     from wavelength_pdf.reflectances import colorchecker, colours_label, load_reflectances
     from wavelength_pdf.spectra import SpectrumError
@@ -153,6 +155,8 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
         raise ValueError(f"colours {colours!r} needs the benchmark's folder (out)")
     if spread and colours != "pixels":
         raise ValueError(f"spread is a property of the pixels (colours 'pixels'), not of colours {colours!r}")
+    if net and not spread:
+        raise ValueError("net models the spread's cells: give spread too")
     if colours == "pixels" and set(candidates) - set(PIXEL_CANDIDATES):
         raise ValueError(f"colours 'pixels' computes only {', '.join(PIXEL_CANDIDATES)}, not "
                          f"{', '.join(sorted(set(candidates) - set(PIXEL_CANDIDATES)))}")
@@ -177,7 +181,7 @@ def predict_jobs(results: Sequence[dict], jobs: Sequence[JobInputs], spps: Seque
             spectra[j.spectrum] = spectrum_of(j)
         if colours == "pixels":
             recs += _pixel_records(j, meas, spps, candidates, by_scene, cache, spectra[j.spectrum], out, pbrt,
-                                   spread)
+                                   spread, net)
             continue
         for row, path in j.tables.items():
             key = (str(path), j.spectrum, j.scene if colours == "scene" else colours_label(use_refl))
@@ -205,10 +209,10 @@ def _record(j: JobInputs, row: str, spp: int, meas: dict) -> dict | None:
 
 
 def scene_transfer(scene: str, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
-                   spp: int | None = None, spread: bool = False):
+                   spp: int | None = None, spread: bool = False, net: bool = False):
     """The transfer (:mod:`wavelength_pdf.evaluation.transfer`) of a benchmark scene at its
     benchmark size, in ``out/transfer/SCENE`` (rendered once), with each pixel's spread if
-    ``spread``."""
+    ``spread``, and its cells if ``net`` (:func:`.transfer.of_file`)."""
     from wavelength_pdf.evaluation import transfer
 
     spec = G.SCENES[scene]
@@ -221,18 +225,19 @@ def scene_transfer(scene: str, out: Path, shared: Path = G.SHARED, pbrt: Path | 
         from wavelength_pdf.evaluation.glass_of_water import with_water
 
         source = with_water(source, folder / "with-water" / "scene.pbrt")
-    return transfer.of_file(source, folder, spec.resolution, pbrt, spp or transfer.SPP, with_spread=spread)
+    return transfer.of_file(source, folder, spec.resolution, pbrt, spp or transfer.SPP, with_spread=spread,
+                            net=net)
 
 
 def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, cache: dict, spectrum,
-                   out: Path, pbrt: Path | None, spread: bool = False) -> list[dict]:
+                   out: Path, pbrt: Path | None, spread: bool = False, net: bool = False) -> list[dict]:
     """``predict_jobs``' records of one job with ``colours='pixels'``: each prediction is the
     mean over the image's lit pixels of that pixel's own (:func:`wavelength_pdf.predict.pixel_de2`)."""
     from wavelength_pdf import predict as P
     from wavelength_pdf.table import read_table
 
     if j.scene not in by_scene:
-        by_scene[j.scene] = scene_transfer(j.scene, out, pbrt=pbrt, spread=spread)
+        by_scene[j.scene] = scene_transfer(j.scene, out, pbrt=pbrt, spread=spread, net=net)
     tr = by_scene[j.scene]
     basis = P.hat_basis(tr.centres, LO, HI)
     recs = []
@@ -255,7 +260,7 @@ def _pixel_records(j: JobInputs, meas: dict, spps, candidates, by_scene: dict, c
                 metric = "lab" if c == "covariance-lab" else "de2000"
                 rec[c] = float(np.mean(P.pixel_de2(pc, tr.t, spp, j.pixel_sampler, metric, incoherence=tr.incoherence,
                                                    terminated=tr.terminated, one_wavelength=one,
-                                                   spread=tr.spread)))
+                                                   spread=tr.spread, cells=tr.cells)))
             recs.append(rec)
     return recs
 

@@ -225,19 +225,20 @@ def _made_by(row: str, p: JobPlan) -> tuple[object | None, str]:
 
 def image_transfer_key(p: JobPlan) -> object:
     """What :func:`image_transfer` depends on: jobs with equal keys share one transfer."""
-    return p.job.scene.key if p.job.resolution is None else p.outdir
+    return (p.job.scene.key if p.job.resolution is None else p.outdir), p.job.wavelength_net
 
 
 def image_transfer(p: JobPlan, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None):
     """The transfer (with each pixel's spread) the job's :data:`~.grid.IMAGE` tables are chosen
     from: the scene's at its benchmark size (``out/transfer/SCENE``, rendered once), or for a
-    job of a size of its own its copy's (its lamp replaced by a flat one)."""
+    job of a size of its own its copy's (its lamp replaced by a flat one). A job rendered with
+    ``--wavelength-net`` gets the spread's cells too, the part of it the net stratifies."""
     from wavelength_pdf.evaluation import transfer
     from wavelength_pdf.evaluation.benchmark.predict import scene_transfer
 
     if p.job.resolution is None:
-        return scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True)
-    return transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True)
+        return scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True, net=p.job.wavelength_net)
+    return transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True, net=p.job.wavelength_net)
 
 
 def image_table(p: JobPlan, spp: int, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,
@@ -262,14 +263,33 @@ def image_table(p: JobPlan, spp: int, out: Path, shared: Path = G.SHARED, pbrt: 
     return path
 
 
+#: A worker's last transfer (key, Transfer): one at a time, since a spread is large.
+_KEPT_TRANSFER: list = [None, None]
+
+
+def _image_task(p: JobPlan, spp: int, out: Path, shared: Path, pbrt: Path | None) -> Path:
+    """:func:`image_table` on a worker, which keeps the last transfer it loaded."""
+    from wavelength_pdf import aot
+
+    key = image_transfer_key(p)
+    if _KEPT_TRANSFER[0] != key:
+        _KEPT_TRANSFER[:] = [None, None]  # the old one freed before the new one loads
+        _KEPT_TRANSFER[:] = [key, image_transfer(p, out, shared, pbrt)]
+    try:
+        return image_table(p, spp, out, shared, pbrt, tr=_KEPT_TRANSFER[1])
+    finally:
+        aot.clear_memory()  # each choice compiles for its own shapes
+
+
 def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str | None = None,
         nthreads: int | None = None, say: Callable[[str], None] | None = None, out: Path | None = None,
         shared: Path = G.SHARED, pbrt: Path | None = None) -> None:
     """Optimize the missing tables and render every image not rendered yet, on a Dask cluster
     (a local one of ``workers`` processes, or the one at ``scheduler``); prints the estimated
     CPU time first and follows the renders with a progress bar. The :data:`~.grid.IMAGE`
-    tables (which need the J tables and the scene's transfer) are made here, after the
-    optimized tables, in this process (``out``: the benchmark's folder)."""
+    tables (which need the J tables and the scene's transfer) are made after the optimized
+    tables, as tasks on the same cluster, each scene's transfer rendered first in this process
+    (``out``: the benchmark's folder)."""
     from distributed import as_completed
 
     from wavelength_pdf import progress
@@ -304,16 +324,15 @@ def run(plans: Sequence[JobPlan], *, workers: int | None = None, scheduler: str 
         if image:
             if out is None:
                 raise ValueError(f"the {G.IMAGE} row needs the benchmark's folder (out)")
-            from wavelength_pdf import aot
-
-            # One transfer loaded at a time (a spread is large), for the jobs that share it.
-            key, tr = None, None
-            with progress.bar(total=len(image), desc=G.IMAGE, file=sys.stderr, unit="table") as bar:
-                for p, spp in image:
-                    if image_transfer_key(p) != key:
-                        key, tr = image_transfer_key(p), image_transfer(p, out, shared, pbrt)
-                    image_table(p, spp, out, shared, pbrt, tr=tr)
-                    aot.clear_memory()  # each choice compiles for its own shapes
+            # Each scene's transfer (and its renders) once, here, before the tables go out to the
+            # workers, which then only load it; in the order of the jobs, so that a worker's
+            # consecutive tables mostly share the one it keeps.
+            for key, (p, _) in {image_transfer_key(p): (p, spp) for p, spp in image}.items():
+                image_transfer(p, out, shared, pbrt)
+            tasks = [client.submit(_image_task, p, spp, out, shared, pbrt, pure=False) for p, spp in image]
+            with progress.bar(total=len(tasks), desc=G.IMAGE, file=sys.stderr, unit="table") as bar:
+                for f in as_completed(tasks):
+                    f.result()
                     bar.update(1)
         futures = []
         # Whole jobs in order of priority (a run stopped early leaves finished jobs to score),

@@ -246,3 +246,105 @@ def test_a_scene_copied_by_several_at_once_is_whole_and_leaves_no_draft(tmp_path
         copies = list(pool.map(lambda _: transfer.copy_scene(scene, tmp_path / "shared", (12, 12)), range(32)))
     assert {c.read_text() for c in copies} == {alone}
     assert sorted(p.name for p in (tmp_path / "shared").iterdir()) == ["scene.pbrt"]
+
+
+# --- The spread between a pixel's cells (pbrt --wavelength-net stratifies it) ---------------
+
+@pytest.mark.parametrize("kind,radius", [("gaussian", 1.5), ("box", 0.5), ("triangle", 2.0)])
+@pytest.mark.parametrize("g", [2, 4])
+def test_cell_shares_cut_each_pixel_into_cells_of_equal_weight(kind, radius, g):
+    shares = transfer.filter_shares(5, 8, kind, radius)
+    cells = transfer.cell_shares(shares, g)
+    np.testing.assert_allclose(cells.reshape(5, g, -1).sum(axis=1), shares)  # each sub-pixel in one cell
+    mass = cells.sum(axis=1).reshape(5, g)
+    # Within one sub-pixel's share of 1 / g (a sub-pixel goes whole to one cell); exact for the box.
+    assert np.abs(mass - 1.0 / g).max() <= (1e-12 if kind == "box" else shares.max())
+    order = np.argmax(cells.reshape(5, g, -1) > 0, axis=2)  # cells fill from the left
+    assert np.all(np.diff(order, axis=1) > 0)
+
+
+def _paths(rng, h, w, k, spectrum_of_column, path_sd):
+    """Two renders (h k, w k, B) of the same paths at independent wavelengths: each sub-pixel's
+    path sees its column's spectrum times a random magnitude of ``path_sd`` (shared by both
+    renders), each render adds its own multiplicative wavelength noise (mean 1)."""
+    clean = np.stack([spectrum_of_column(c % k) for c in range(w * k)])[None].repeat(h * k, axis=0)
+    paths = clean * rng.normal(1.0, path_sd, clean.shape[:2])[..., None]
+    return [paths * rng.gamma(4.0, 0.25, paths.shape) for _ in range(2)]
+
+
+def test_the_spread_between_cells_is_unbiased_by_the_paths_within_them():
+    rng = np.random.default_rng(8)
+    B, h, w, k = 4, 30, 30, 8
+    T1, T2 = rng.uniform(0.2, 1.0, B), rng.uniform(0.2, 1.0, B)
+    sy, sx = transfer.filter_shares(h, k, "box", 0.5), transfer.filter_shares(w, k, "box", 0.5)
+    # Every pixel's left half sees T1, its right half T2 (an edge down its middle), each path
+    # varying by 30 % more: between cells cut along x lies the edge's spread, 0.25 D D', alone;
+    # between cells cut along y alone, nothing.
+    a, b = _paths(rng, h, w, k, lambda c: T1 if c < k // 2 else T2, 0.3)
+    S = transfer.spread_of(a, b, sy, sx)
+    D = T1 - T2
+    edge = 0.25 * D[:, None] * D[None, :]
+    scale = np.abs(edge).max()
+    for cells, want in (((2, 2), edge), ((4, 4), edge), ((1, 2), edge), ((1, 8), edge), ((2, 1), 0 * edge)):
+        got = transfer.cell_spread_of(a, b, sy, sx, cells, S).mean(axis=(0, 1))
+        np.testing.assert_allclose(got, want, atol=0.05 * scale, err_msg=str(cells))
+    assert np.trace(S.mean(axis=(0, 1))) > 1.5 * np.trace(edge)  # the paths' own spread is more
+    # One spectrum, the paths varying alone: nothing between cells, though each cell's mean of
+    # 16 paths is itself noisy (uncorrected, it counts 1/16 of the paths' spread less the pixel
+    # mean's 1/64).
+    a, b = _paths(rng, h, w, k, lambda c: T1, 0.3)
+    S = transfer.spread_of(a, b, sy, sx)
+    total = np.trace(S.mean(axis=(0, 1)))
+    assert abs(np.trace(transfer.cell_spread_of(a, b, sy, sx, (2, 2), S).mean(axis=(0, 1)))) < 0.01 * total
+    raw = transfer.cell_spread_of(a, b, sy, sx, (2, 2), np.zeros_like(S))  # no correction: the paths' noise
+    assert np.trace(raw.mean(axis=(0, 1))) > 0.03 * total
+
+
+def _edge_pixel(fl2_basis):
+    """A pixel whose left half sees a reddish spectrum, its right half a bluish one: its mean
+    t, spread S and the difference D."""
+    red = 0.2 + 0.7 * (CENTRES > 580.0)
+    blue = 0.2 + 0.7 * (CENTRES < 500.0)
+    t = 0.5 * (red + blue)[None, :]
+    D = red - blue
+    return t, 0.25 * (D[:, None] * D[None, :])[None], D
+
+
+def _levels(S, between):
+    """The cells of :func:`transfer.net_cells` with ``between(i, j)`` of the spread ``S``."""
+    return tuple(((i, j), between(i, j) * S) for i, j in transfer.net_cells())
+
+
+def test_cells_of_nothing_or_too_few_samples_change_nothing(fl2_basis):
+    t, S, _ = _edge_pixel(fl2_basis)
+    plain = P.pixel_de2(fl2_basis, t, 64, spread=S)
+    none = _levels(S, lambda i, j: 0.0)
+    np.testing.assert_allclose(P.pixel_de2(fl2_basis, t, 64, spread=S, cells=none), plain, rtol=1e-12)
+    # At 4 spp (m = 2) a cell of two halves holds 2 samples: the net stratifies none of the spread.
+    edge = _levels(S, lambda i, j: float(j >= 1))
+    np.testing.assert_allclose(P.pixel_de2(fl2_basis, t, 4, spread=S, cells=edge),
+                               P.pixel_de2(fl2_basis, t, 4, spread=S), rtol=1e-12)
+    with pytest.raises(ValueError, match="spread"):
+        P.pixel_de2(fl2_basis, t, 64, cells=none)
+    with pytest.raises(ValueError, match="low-discrepancy"):
+        P.pixel_de2(fl2_basis, t, 64, "independent", spread=S, cells=none)
+    with pytest.raises(ValueError, match="every level"):
+        P.pixel_de2(fl2_basis, t, 64, spread=S, cells=none[:-1])
+
+
+@pytest.mark.parametrize("spp", [16, 64])
+def test_an_edge_between_cells_is_stratified_with_the_net(fl2_basis, spp):
+    """An edge down the pixel's middle is the spread between its halves along x, level (0, 1):
+    a (1, m, 3)-net integrates it times any function of u constant on 2^(m - 2) strata, so
+    what is left is C(u)'s covariance within those strata, over N."""
+    t, S, D = _edge_pixel(fl2_basis)
+    with_net = P.pixel_de2(fl2_basis, t, spp, spread=S, cells=_levels(S, lambda i, j: float(j >= 1)))
+    n = spp // 4
+    cov = ((n / spp) * np.einsum("b,bicj,c->ij", D, P.basis_covariance(fl2_basis, n), D) / 4
+           + np.einsum("b,bicj,c->ij", t[0], P.basis_covariance(fl2_basis, spp), t[0]))
+    np.testing.assert_allclose(with_net, P.lab_quadratic(t @ fl2_basis.target, cov[None]), rtol=1e-9)
+    # Far less than unstratified, and the less the more samples a half holds.
+    assert with_net[0] < {16: 0.5, 64: 0.2}[spp] * P.pixel_de2(fl2_basis, t, spp, spread=S)[0]
+    # Cut across y as well (2 x 2 cells, level (1, 1)), a cell's strata are half as many: more.
+    square = P.pixel_de2(fl2_basis, t, spp, spread=S, cells=_levels(S, lambda i, j: float(i >= 1 and j >= 1)))
+    assert square[0] > with_net[0]
