@@ -28,8 +28,6 @@ def cmd_choose(args: argparse.Namespace) -> int:
                        f"(--resolution-scale 1), not {args.resolution_scale:g} of it")
     if args.polish and args.pixel_sampler != "sobol":
         raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
-    if args.wavelength_net and not (args.spread and args.pixel_sampler == "sobol"):
-        raise BadInput("--wavelength-net models the spread's cells: it needs --spread and --pixel-sampler sobol")
     tables = {}
     for path in args.tables:
         tables[str(path)] = read_table(path)  # every table read (and refused) before any render
@@ -37,8 +35,7 @@ def cmd_choose(args: argparse.Namespace) -> int:
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     preds = predict_tables(args.scene, tables, args.spp, workdir, pixel_sampler=args.pixel_sampler,
                            resolution=args.resolution_scale, pbrt=args.pbrt, transfer_spp=args.transfer_spp,
-                           simple=not args.no_simple, polish=args.polish, spread=args.spread,
-                           net=args.wavelength_net, say=say)
+                           simple=not args.no_simple, polish=args.polish, spread=args.spread, say=say)
     width = max(len(p.name) for p in preds)
     print(f"{args.scene} at {args.spp} spp ({args.pixel_sampler}): predicted mean squared CIEDE2000 over "
           f"the lit pixels")
@@ -147,10 +144,6 @@ def add_parser(sub) -> None:
                         "off coloured walls; design §6.8) from two renders of the same paths at independent "
                         "wavelengths, one path per sub-pixel at 8 x 8 sub-pixels: measured at the scene's own film "
                         "size, so the renders cost more than at the default tenth")
-    c.add_argument("--wavelength-net", action="store_true",
-                   help="with --spread: you render with pbrt --wavelength-net, which draws u together with the "
-                        "film position, so that the spread between a pixel's 2 x 2 and 4 x 4 cells is stratified "
-                        "where each cell holds more than 2 samples (design §6.8)")
     _prediction_options(c, None)
     c.set_defaults(func=cmd_choose, extra="evaluation")
 

@@ -225,20 +225,21 @@ def _made_by(row: str, p: JobPlan) -> tuple[object | None, str]:
 
 def image_transfer_key(p: JobPlan) -> object:
     """What :func:`image_transfer` depends on: jobs with equal keys share one transfer."""
-    return (p.job.scene.key if p.job.resolution is None else p.outdir), p.job.wavelength_net
+    return p.job.scene.key if p.job.resolution is None else p.outdir
 
 
 def image_transfer(p: JobPlan, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None):
     """The transfer (with each pixel's spread) the job's :data:`~.grid.IMAGE` tables are chosen
     from: the scene's at its benchmark size (``out/transfer/SCENE``, rendered once), or for a
-    job of a size of its own its copy's (its lamp replaced by a flat one). A job rendered with
-    ``--wavelength-net`` gets the spread's cells too, the part of it the net stratifies."""
+    job of a size of its own its copy's (its lamp replaced by a flat one). Without the spread's
+    cells even on ``--wavelength-net`` runs: with them the choices measured worse
+    (docs/benchmark.md, "What the net stratifies of a pixel's spread")."""
     from wavelength_pdf.evaluation import transfer
     from wavelength_pdf.evaluation.benchmark.predict import scene_transfer
 
     if p.job.resolution is None:
-        return scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True, net=p.job.wavelength_net)
-    return transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True, net=p.job.wavelength_net)
+        return scene_transfer(p.job.scene.key, out, shared, pbrt, spread=True)
+    return transfer.of_file(p.scene, p.outdir / "transfer", 1.0, pbrt, with_spread=True)
 
 
 def image_table(p: JobPlan, spp: int, out: Path, shared: Path = G.SHARED, pbrt: Path | None = None,

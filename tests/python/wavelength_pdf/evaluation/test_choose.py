@@ -71,8 +71,6 @@ def test_an_emitter_of_another_kind_is_refused(tmp_path, capsys):
     ([str(BOX), "missing.csv"], "missing.csv"),
     ([str(BOX), "--no-simple"], "nothing to compare"),
     ([str(BOX), "--resolution-scale", "2"], "resolution-scale"),
-    ([str(BOX), "--wavelength-net"], "needs --spread"),
-    ([str(BOX), "--spread", "--wavelength-net", "--pixel-sampler", "independent"], "needs --spread"),
 ])
 def test_bad_input_is_refused_before_any_render(args, message, tmp_path, capsys):
     work = tmp_path / "work"
