@@ -221,18 +221,24 @@ def cell_shares(shares: np.ndarray, g: int) -> np.ndarray:
 
 
 def cell_spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.ndarray,
-                   cells: tuple[int, int], spread: np.ndarray) -> np.ndarray:
+                   cells: tuple[int, int], spread: np.ndarray, correct: bool = False) -> np.ndarray:
     """(h, w, B, B): the part of each pixel's ``spread`` (:func:`spread_of` of the same renders)
     that lies between its gy x gx cells of equal filter weight (``cells``, along y and x;
     :func:`cell_shares`): the covariance of the cells' mean spectra, sum_c W_c (T_c - T)(T_c - T)'.
 
-    The cells' means over the renders' paths are noisy themselves: their products also count
-    the paths' spread within a cell, W = S - B, over the cell's effective number of paths k_c
-    (W_c^2 / sum_q w_q^2), less the pixel mean's own, sigma W (sigma = sum_q w_q^2), which the
-    measured spread S' = B + (1 - sigma) W lacks too (:func:`spread_of`). With
-    1/k = sum_c W_c / k_c over the pixel's cells and rho = (1/k - sigma) / (1 - sigma), the
-    measured B' = B + rho (S' - B) is solved for B = (B' - rho S') / (1 - rho). One factor of
-    each product from each render, as in :func:`spread_of`."""
+    As measured (the default), the levels nest: over the renders' paths, a cell's spread
+    from the pixel is the sum of its parts (design §6.8), none negative in expectation. Where
+    the paths within a cell differ at random (one off a red wall, the next off a green one),
+    the cells' means are noisy themselves and the measure counts that spread, W = S - B, over
+    the cell's effective number of paths k_c (W_c^2 / sum_q w_q^2) too: with the gaussian
+    filter at least 36 paths per cell at the levels the net stratifies at 64 spp, so a few per
+    cent of W. ``correct`` takes it off: with 1/k = sum_c W_c / k_c over the pixel's cells,
+    sigma = sum_q w_q^2 (the pixel mean's own share, which the measured spread
+    S' = B + (1 - sigma) W lacks too, :func:`spread_of`) and rho = (1/k - sigma) / (1 - sigma),
+    B = (B' - rho S') / (1 - rho), unbiased where the paths within a cell are random draws but
+    not where a cell's sub-pixels differ by a fixed edge. On the ColorChecker the two differ by
+    a few per cent of the spread at any level. One factor of each product from each render, as
+    in :func:`spread_of`."""
     from scipy.sparse import csr_array
 
     h, w, B = shares_y.shape[0], shares_x.shape[0], a.shape[2]
@@ -256,6 +262,8 @@ def cell_spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x:
     pa, pb = per_pixel(weight[..., None] * ma), per_pixel(weight[..., None] * mb)
     prod = per_pixel(weight[..., None, None] * ma[..., :, None] * mb[..., None, :]) - pa[..., :, None] * pb[..., None, :]
     prod = 0.5 * (prod + np.swapaxes(prod, -1, -2))
+    if not correct:
+        return prod
     squares = cellsum(ones, csr_array(cy ** 2), csr_array(cx ** 2))
     inv_k, sigma = per_pixel(squares * inv), per_pixel(squares)
     rho = ((inv_k - sigma) / np.maximum(1.0 - sigma, 1e-12))[..., None, None]

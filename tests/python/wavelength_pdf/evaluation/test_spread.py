@@ -286,7 +286,7 @@ def test_the_spread_between_cells_is_unbiased_by_the_paths_within_them():
     edge = 0.25 * D[:, None] * D[None, :]
     scale = np.abs(edge).max()
     for cells, want in (((2, 2), edge), ((4, 4), edge), ((1, 2), edge), ((1, 8), edge), ((2, 1), 0 * edge)):
-        got = transfer.cell_spread_of(a, b, sy, sx, cells, S).mean(axis=(0, 1))
+        got = transfer.cell_spread_of(a, b, sy, sx, cells, S, correct=True).mean(axis=(0, 1))
         np.testing.assert_allclose(got, want, atol=0.05 * scale, err_msg=str(cells))
     assert np.trace(S.mean(axis=(0, 1))) > 1.5 * np.trace(edge)  # the paths' own spread is more
     # One spectrum, the paths varying alone: nothing between cells, though each cell's mean of
@@ -295,9 +295,41 @@ def test_the_spread_between_cells_is_unbiased_by_the_paths_within_them():
     a, b = _paths(rng, h, w, k, lambda c: T1, 0.3)
     S = transfer.spread_of(a, b, sy, sx)
     total = np.trace(S.mean(axis=(0, 1)))
-    assert abs(np.trace(transfer.cell_spread_of(a, b, sy, sx, (2, 2), S).mean(axis=(0, 1)))) < 0.01 * total
-    raw = transfer.cell_spread_of(a, b, sy, sx, (2, 2), np.zeros_like(S))  # no correction: the paths' noise
+    assert abs(np.trace(transfer.cell_spread_of(a, b, sy, sx, (2, 2), S, correct=True).mean(axis=(0, 1)))) \
+        < 0.01 * total
+    raw = transfer.cell_spread_of(a, b, sy, sx, (2, 2), S)  # as measured: with the paths' noise
     assert np.trace(raw.mean(axis=(0, 1))) > 0.03 * total
+
+
+def test_the_levels_of_the_spread_as_measured_are_covariances():
+    """As measured the cells nest, so each level's part of the spread (its inclusion-exclusion
+    over the coarser levels) is a covariance in expectation and the whole spread their sum,
+    here for an edge fixed on the sub-pixel grid (a diagonal one in every pixel, finer than
+    any cell) under wavelength noise alone."""
+    rng = np.random.default_rng(9)
+    B, h, w, k = 3, 24, 24, 8
+    T1, T2 = rng.uniform(0.2, 1.0, B), rng.uniform(0.2, 1.0, B)
+    yy, xx = np.mgrid[0:h * k, 0:w * k]
+    clean = np.where(((xx % k) + (yy % k) < k - 1)[..., None], T1, T2)
+    a, b = (clean * rng.gamma(16.0, 1 / 16.0, clean.shape) for _ in range(2))
+    sy, sx = transfer.filter_shares(h, k, "gaussian", 1.5), transfer.filter_shares(w, k, "gaussian", 1.5)
+    S = transfer.spread_of(a, b, sy, sx)
+    L = transfer.NET_LEVEL
+
+    def mean_level(i, j):
+        if (i, j) == (0, 0) or i < 0 or j < 0:
+            return np.zeros((B, B))
+        if (i, j) == (L, L):
+            return S.mean(axis=(0, 1))
+        return transfer.cell_spread_of(a, b, sy, sx, (2 ** i, 2 ** j), S).mean(axis=(0, 1))
+
+    V = {(i, j): mean_level(i, j) for i in range(-1, L + 1) for j in range(-1, L + 1)}
+    parts = [V[i, j] - V[i - 1, j] - V[i, j - 1] + V[i - 1, j - 1]
+             for i in range(L + 1) for j in range(L + 1) if (i, j) != (0, 0)]
+    scale = np.trace(S.mean(axis=(0, 1)))
+    assert min(np.linalg.eigvalsh(0.5 * (q + q.T)).min() for q in parts) > -0.02 * scale  # noise only
+    assert max(np.trace(q) for q in parts) > 0.1 * scale  # and the edge is somewhere
+    np.testing.assert_allclose(sum(parts), S.mean(axis=(0, 1)), atol=1e-12 * scale)
 
 
 def _edge_pixel(fl2_basis):
