@@ -564,7 +564,7 @@ def _net_levels(spread: np.ndarray, cells, spp: int, y: np.ndarray, pixel_sample
     L = max((max(k) for k in V), default=0)
     if L < 1 or set(V) != {(i, j) for i in range(L + 1) for j in range(L + 1) if 0 < i + j < 2 * L}:
         raise ValueError("cells must be every level (i, j) up to some L >= 1 but (0, 0) and (L, L)")
-    V[(0, 0)], V[(L, L)] = np.zeros_like(spread), spread
+    V[(0, 0)] = 0.0  # the pixel itself: no spread between cells (level (L, L) is the rest's)
     m = int(spp).bit_length() - 1
     y = np.asarray(y, dtype=np.float64)
     whole = float(np.einsum("b,pbc,c->", y, spread, y))
@@ -575,7 +575,7 @@ def _net_levels(spread: np.ndarray, cells, spp: int, y: np.ndarray, pixel_sample
     shares = {}
     for (i, j) in sorted(V):
         k = m - 1 - i - j
-        if (i, j) in ((0, 0), (L, L)) or k < 1:
+        if (i, j) == (0, 0) or k < 1:
             continue  # unstratified: with the rest
         part = at(i, j) - at(i - 1, j) - at(i, j - 1) + at(i - 1, j - 1)
         ratio = float(np.einsum("b,pbc,c->", y, part, y)) / whole if whole > 0 else 0.0
