@@ -187,17 +187,22 @@ def spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x: np.n
 
     # A share reaches a few pixels' radius: as sparse matrices, a product costs the image's size.
     sy, sx = csr_array(shares_y), csr_array(shares_x)
+    return _weighted_spread(a, b, lambda img: np.asarray((sx @ (sy @ img).T).T))
 
-    def filt(img):
-        return np.asarray((sx @ (sy @ img).T).T)
 
+def _weighted_spread(a: np.ndarray, b: np.ndarray, pixel_mean) -> np.ndarray:
+    """(h, w, B, B): each pixel's sum_q w_q (a_q - a)(b_q - b)', symmetrised, of two images
+    (.., .., B) of spectra a_q, b_q, ``pixel_mean`` mapping one band of an image (2-D) to each
+    pixel's weighted mean (h, w) with weights w_q summing to 1 (a, b the pixel's means). The
+    sum :func:`spread_of` (sub-pixels) and :func:`cell_spread_of` (cells) share; a band pair
+    at a time, since all products of an image's bands at 8 sub-pixels a side would not fit."""
     B = a.shape[2]
-    ma = np.stack([filt(a[..., i]) for i in range(B)], axis=-1)
-    mb = np.stack([filt(b[..., i]) for i in range(B)], axis=-1)
+    ma = np.stack([pixel_mean(a[..., i]) for i in range(B)], axis=-1)
+    mb = np.stack([pixel_mean(b[..., i]) for i in range(B)], axis=-1)
     out = np.empty(ma.shape[:2] + (B, B))
     for i in range(B):
         for j in range(i, B):
-            v = 0.5 * (filt(a[..., i] * b[..., j] + a[..., j] * b[..., i]) - ma[..., i] * mb[..., j]
+            v = 0.5 * (pixel_mean(a[..., i] * b[..., j] + a[..., j] * b[..., i]) - ma[..., i] * mb[..., j]
                        - ma[..., j] * mb[..., i])
             out[..., i, j] = out[..., j, i] = v
     return out
@@ -259,9 +264,7 @@ def cell_spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x:
     inv = np.divide(1.0, weight, out=np.zeros_like(weight), where=weight > 0)
     ma = np.stack([cellsum(a[..., i]) * inv for i in range(B)], axis=-1)
     mb = np.stack([cellsum(b[..., i]) * inv for i in range(B)], axis=-1)
-    pa, pb = per_pixel(weight[..., None] * ma), per_pixel(weight[..., None] * mb)
-    prod = per_pixel(weight[..., None, None] * ma[..., :, None] * mb[..., None, :]) - pa[..., :, None] * pb[..., None, :]
-    prod = 0.5 * (prod + np.swapaxes(prod, -1, -2))
+    prod = _weighted_spread(ma, mb, lambda x: per_pixel(weight * x))
     if not correct:
         return prod
     squares = cellsum(ones, csr_array(cy ** 2), csr_array(cx ** 2))
