@@ -155,6 +155,29 @@ def removed_share(e_sampler: float, e_uniform: float, e_floor: float) -> float:
     return 1.0 - (e_sampler - e_floor) / removable
 
 
+def share_above_floor(table, simple, floor) -> tuple[float, float]:
+    """The table's error above the floor over a simple sampler's, (mean T - mean F) /
+    (mean S - mean F), and its standard error, from K independent seed pairs' measures of each
+    (sequences of K values, pair k of each rendered with the same seeds): the jackknife over
+    the pairs (leave one pair out of all three means), which needs no model of how a pair's
+    measure varies (se nan for one pair). NaN where the simple sampler is not above the
+    floor."""
+    t, s, f = (np.asarray(x, np.float64) for x in (table, simple, floor))
+    k = t.size
+    if not (t.shape == s.shape == f.shape == (k,)) or k == 0:
+        raise ValueError(f"share_above_floor: {t.shape}, {s.shape}, {f.shape} pairs' measures")
+
+    def share(tm, sm, fm):
+        return (tm - fm) / (sm - fm) if sm > fm else float("nan")
+
+    whole = share(t.mean(), s.mean(), f.mean())
+    if k < 2 or not np.isfinite(whole):
+        return whole, float("nan")
+    drop = [(x.sum() - x) / (k - 1) for x in (t, s, f)]
+    loo = np.array([share(*(d[i] for d in drop)) for i in range(k)])
+    return whole, float(np.sqrt((k - 1) / k * np.sum((loo - loo.mean()) ** 2)))
+
+
 def equal_time_ratio(e_a: float, t_a: float, e_b: float, t_b: float, slope: float = 1.0) -> float:
     """Error of A over error of B at equal CPU time, from errors at equal spp and CPU seconds
     per image: a squared error that falls as spp^-slope (1 for independent samples) at A's

@@ -423,6 +423,17 @@ def _header(path: Path) -> dict:
     return {"cpu": float(h.get("renderCPUSeconds", np.nan)), "depth": float(h.get("meanPathDepth", np.nan))}
 
 
+def reference(p: JobPlan):
+    """The job's reference from its finished chunks: (image, its two halves, :class:`~.measures.Truth`)."""
+    from wavelength_pdf.exr import read_rgb
+
+    chunks = [read_rgb(r.out) for r in p.truth_chunks]
+    spp = [r.spp for r in p.truth_chunks]
+    image = merge_chunks(chunks, spp)
+    halves = merge_chunks(chunks[0::2], spp[0::2]), merge_chunks(chunks[1::2], spp[1::2])
+    return image, halves, measures.Truth.of(image, *halves)
+
+
 def score(p: JobPlan) -> dict:
     """The job's measures (every row and the floor at every spp), its reference's noise and
     every row's bias z-scores; cached in ``scores.json`` by the renders' keys."""
@@ -438,11 +449,7 @@ def score(p: JobPlan) -> dict:
                 return done
         except ValueError:
             pass
-    chunks = [read_rgb(r.out) for r in p.truth_chunks]
-    spp = [r.spp for r in p.truth_chunks]
-    truth_img = merge_chunks(chunks, spp)
-    halves = merge_chunks(chunks[0::2], spp[0::2]), merge_chunks(chunks[1::2], spp[1::2])
-    truth = measures.Truth.of(truth_img, *halves)
+    truth_img, halves, truth = reference(p)
     rows = sorted({row for row, _, _ in p.images})
     have = {(row, n) for row, n, _ in p.images} | {(G.FLOOR, n) for n, _ in p.floor}
     out: dict = {"key": key, "job": p.job.name, "scene": p.job.scene.key, "lamp": p.job.lamp_key,

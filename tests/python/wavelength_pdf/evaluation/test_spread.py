@@ -12,7 +12,13 @@
 - the scene's pixel filter is read, with pbrt-v4's defaults;
 - rendered, the spread is each path's own (one seed at two wavelength seeds): it sees the
   patches' edges of a ColorChecker, and the red and green light a white floor gets off two
-  walls, which a seed pair of sub-pixel means does not.
+  walls, which a seed pair of sub-pixel means does not;
+- between a pixel's cells (what ``pbrt --wavelength-net`` stratifies): cells of equal filter
+  weight for three filters; the corrected spread between cells is unbiased by the random
+  paths within them (an edge down the middle: 0.25 D D' across x, nothing across y alone);
+  as measured, the levels nest, each level's part is a covariance within noise and the parts
+  sum to the spread; cells of nothing, or too few samples to stratify, change no prediction;
+  an edge between halves is left with C(u)'s covariance within 2^(m-2) strata.
 """
 from __future__ import annotations
 
