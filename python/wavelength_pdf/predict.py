@@ -564,21 +564,27 @@ def _net_levels(spread: np.ndarray, cells, spp: int, y: np.ndarray, pixel_sample
     L = max((max(k) for k in V), default=0)
     if L < 1 or set(V) != {(i, j) for i in range(L + 1) for j in range(L + 1) if 0 < i + j < 2 * L}:
         raise ValueError("cells must be every level (i, j) up to some L >= 1 but (0, 0) and (L, L)")
-    V[(0, 0)] = 0.0  # the pixel itself: no spread between cells (level (L, L) is the rest's)
     m = int(spp).bit_length() - 1
     y = np.asarray(y, dtype=np.float64)
-    whole = float(np.einsum("b,pbc,c->", y, spread, y))
+
+    def lum(v):  # a spread's luminance, summed over the pixels: the only figure of it a share needs
+        return float(np.einsum("b,pbc,c->", y, v, y))
+
+    # The inclusion-exclusion is linear: taken on each level's luminance, not its (P, B, B) arrays.
+    Y = {key: lum(v) for key, v in V.items()}
+    Y[(0, 0)] = 0.0  # the pixel itself: no spread between cells (level (L, L) is the rest's)
+    whole = lum(spread)
 
     def at(i, j):
-        return V[(i, j)] if i >= 0 and j >= 0 else 0.0
+        return Y[(i, j)] if i >= 0 and j >= 0 else 0.0
 
     shares = {}
-    for (i, j) in sorted(V):
+    for (i, j) in sorted(Y):
         k = m - 1 - i - j
         if (i, j) == (0, 0) or k < 1:
             continue  # unstratified: with the rest
         part = at(i, j) - at(i - 1, j) - at(i, j - 1) + at(i - 1, j - 1)
-        ratio = float(np.einsum("b,pbc,c->", y, part, y)) / whole if whole > 0 else 0.0
+        ratio = part / whole if whole > 0 else 0.0
         shares[2 ** k] = shares.get(2 ** k, 0.0) + min(max(ratio, 0.0), 1.0)
     total = sum(shares.values())
     scale = 1.0 / max(total, 1.0)
