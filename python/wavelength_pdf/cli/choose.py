@@ -10,6 +10,10 @@ from pathlib import Path
 
 from wavelength_pdf.cli import BadInput, Formatter, out_folder, positive_int
 
+#: The polish's default budget (wavelength_pdf.solvers.REFINE_EVALUATIONS), written out so
+#: that ``--help`` imports no solver; a test holds the two equal.
+REFINE_EVALUATIONS = 200
+
 
 def cmd_choose(args: argparse.Namespace) -> int:
     from wavelength_pdf.evaluation.choose import predict_tables
@@ -28,6 +32,8 @@ def cmd_choose(args: argparse.Namespace) -> int:
                        f"(--resolution-scale 1), not {args.resolution_scale:g} of it")
     if args.polish and args.pixel_sampler != "sobol":
         raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
+    if args.polish_evaluations is not None and not args.polish:
+        raise BadInput("--polish-evaluations is the polish's budget: give --polish too")
     tables = {}
     for path in args.tables:
         tables[str(path)] = read_table(path)  # every table read (and refused) before any render
@@ -35,7 +41,8 @@ def cmd_choose(args: argparse.Namespace) -> int:
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     preds = predict_tables(args.scene, tables, args.spp, workdir, pixel_sampler=args.pixel_sampler,
                            resolution=args.resolution_scale, pbrt=args.pbrt, transfer_spp=args.transfer_spp,
-                           simple=not args.no_simple, polish=args.polish, spread=args.spread, say=say)
+                           simple=not args.no_simple, polish=args.polish, spread=args.spread,
+                           polish_evaluations=args.polish_evaluations, say=say)
     width = max(len(p.name) for p in preds)
     print(f"{args.scene} at {args.spp} spp ({args.pixel_sampler}): predicted mean squared CIEDE2000 over "
           f"the lit pixels")
@@ -65,6 +72,8 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
         raise BadInput(f"--margin must lie in [0, 1), not {args.margin:g}")
     if args.polish and args.pixel_sampler != "sobol":
         raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
+    if args.polish_evaluations is not None and not args.polish:
+        raise BadInput("--polish-evaluations is the polish's budget: give --polish too")
     if not args.candidates and not args.polish:
         raise BadInput("nothing to choose from: give folders of optimized tables (TABLES) or --polish")
     candidates = {}
@@ -80,7 +89,7 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
                                         margin=args.margin, pixel_sampler=args.pixel_sampler,
                                         resolution=args.resolution_scale,
                                         pbrt=args.pbrt, transfer_spp=args.transfer_spp, polish=args.polish,
-                                        say=say)
+                                        polish_evaluations=args.polish_evaluations, say=say)
     except ValueError as e:
         raise BadInput(str(e)) from None
     names = list(dict.fromkeys([EMISSION, *candidates, *(n for c in choices for n in c.predicted)]))
@@ -114,6 +123,9 @@ def _prediction_options(c, resolution: float) -> None:
     c.add_argument("--workdir", type=Path, default=None, metavar="DIR",
                    help="where the renders go, kept for the next run (default out/choose/FOLDER/SCENE)")
     c.add_argument("--pbrt", type=Path, default=None, help="the renderer (default: as design §7)")
+    c.add_argument("--polish-evaluations", type=positive_int, default=None, metavar="N",
+                   help="with --polish: each polish's budget of objective evaluations (default "
+                        f"{REFINE_EVALUATIONS}; fewer are faster and may stop short of the best table)")
     c.add_argument("--quiet", action="store_true", help="no progress messages")
 
 

@@ -180,10 +180,12 @@ def candidates(spectrum, tables: Mapping[str, object], simple: bool = True) -> d
 
 def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, object] | None = None, *,
               simple: bool = True, polish: bool = True, pixel_sampler: str = "sobol",
+              polish_evaluations: int | None = None,
               say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
     """The table for the image ``tr`` is the transfer of, at ``spp``: the simple samplers
     (``simple``) and ``tables``, with ``polish`` also the ``spd`` table and each of ``tables``
-    polished for the scene's pixels (:func:`polished_tables`; below :data:`CONTINUATION_SPP`
+    polished for the scene's pixels (:func:`polished_tables`, each at most
+    ``polish_evaluations`` evaluations, None: its default; below :data:`CONTINUATION_SPP`
     each also polished at that spp first, then at ``spp``), all ranked by their predicted
     error (:func:`rank`), best first. Without ``tables`` this needs no optimizer run but the
     polish (seconds). The polish models the low-discrepancy pixel sampler."""
@@ -197,11 +199,13 @@ def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, ob
 
         starts = {"spd": cands["spd"] if "spd" in cands else simple_tables(spectrum)["spd"],
                   **{n: t for n, t in cands.items() if n not in METHODS}}
-        cands.update(polished_tables(spectrum, tr, spp, starts, say))
+        budget = {"say": say, "max_evaluations": polish_evaluations}
+        cands.update(polished_tables(spectrum, tr, spp, starts, **budget))
         if spp < CONTINUATION_SPP:
-            first = polished_tables(spectrum, tr, CONTINUATION_SPP, starts, say)
+            first = polished_tables(spectrum, tr, CONTINUATION_SPP, starts, **budget)
             cands.update(polished_tables(spectrum, tr, spp, {
-                f"{name.removeprefix(POLISHED + ' ')} via {CONTINUATION_SPP} spp": t for name, t in first.items()}, say))
+                f"{name.removeprefix(POLISHED + ' ')} via {CONTINUATION_SPP} spp": t for name, t in first.items()},
+                **budget))
     if not cands:
         raise ValueError("no table to predict: give tables or keep the simple samplers")
     return rank(spectrum, tr, cands, spp, pixel_sampler, say)
@@ -211,12 +215,14 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
                    pixel_sampler: str = "sobol", resolution: float | tuple[int, int] = 0.1,
                    pbrt: Path | None = None, transfer_spp: int = transfer.SPP, simple: bool = True,
                    polish: bool = False, spread: bool = False, net: bool = False,
+                   polish_evaluations: int | None = None,
                    say: Callable[[str], None] = lambda m: None) -> list[Prediction]:
     """Every candidate's predicted error in ``scene`` at ``spp``, best first.
 
     ``scene`` must be lit by one kind of light (its emitters' spectra equal up to scale);
     ``tables`` maps names to :class:`~wavelength_pdf.table.Table`; ``simple`` adds the simple
-    samplers, ``polish`` the polished tables of :func:`for_image`. ``spread``: each pixel's
+    samplers, ``polish`` the polished tables of :func:`for_image` (each at most
+    ``polish_evaluations`` evaluations, None: its default). ``spread``: each pixel's
     spread (:func:`.transfer.spread`, the spectra its samples see) in place of its
     incoherence; it is a property of the pixels you render, so give ``resolution`` 1 (the
     scene's own film) or the size you render at; with ``net`` (you render with ``pbrt
@@ -232,4 +238,5 @@ def predict_tables(scene: str | Path, tables: Mapping[str, object], spp: int, wo
     say(f"choose: the scene's transfer ({transfer_spp} spp) and incoherence (2 x {transfer.INCOHERENCE_SPP} spp) "
         f"at {size}" + (", with each pixel's spread" if spread else "") + f", in {workdir}")
     tr = transfer.of_file(scene, workdir, resolution, pbrt, transfer_spp, with_spread=spread, net=net)
-    return for_image(spectrum, tr, spp, tables, simple=simple, polish=polish, pixel_sampler=pixel_sampler, say=say)
+    return for_image(spectrum, tr, spp, tables, simple=simple, polish=polish, pixel_sampler=pixel_sampler,
+                     polish_evaluations=polish_evaluations, say=say)

@@ -219,6 +219,9 @@ class Job:
     sweep: str = "scenes"
     #: Every render with ``--wavelength-net`` (design §5.2), reference and floor included.
     wavelength_net: bool = False
+    #: Each polish's budget of evaluations when the :data:`IMAGE` table is made (``choose
+    #: --polish-evaluations``); None: the polish's default.
+    polish_evaluations: int | None = None
 
     @property
     def size(self) -> tuple[int, int] | float:
@@ -274,11 +277,11 @@ def small_grid(shared: Path = SHARED) -> GridSpec:
     samplers and the two-lamp box under its own lamps, tiny images and few samples, the simple
     samplers and the optimizer's start (no optimization, no shared material needed), and on
     the low-discrepancy box the table ``choose --polish --spread`` picks (IMAGE: polishing
-    needs no optimizer run)."""
+    needs no optimizer run; short polishes, for the suite's time)."""
     g = GridSpec(shared=shared)
     tri = LampSpec("tri-band", str(CHECKOUT / "spectra" / "tri-band-fluorescent.spd"), "fluorescent", True)
     small = dict(resolution=(12, 12), spp=(4, 16), truth_spp=1024, floor_repeats=4, floor_spp=(4, 16),
-                 check_spp=(4, 16), sweep="small")
+                 check_spp=(4, 16), sweep="small", polish_evaluations=40)
     for ps in PIXEL_SAMPLERS:
         add(g, Job(SCENES["project-box"], tri, ps, rows=(*SIMPLE, "start", IMAGE), **small))
     add(g, Job(SCENES["two-lamp-box"], None, "sobol", rows=SIMPLE, **small))

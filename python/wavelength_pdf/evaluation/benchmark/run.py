@@ -255,7 +255,7 @@ def image_table(p: JobPlan, spp: int, out: Path, shared: Path = G.SHARED, pbrt: 
     if tr is None:
         tr = image_transfer(p, out, shared, pbrt)
     given = {"optimized": read_table(p.tables["optimized"])} if "optimized" in p.tables else {}
-    preds = choose.for_image(p.spectrum, tr, spp, given, say=say)
+    preds = choose.for_image(p.spectrum, tr, spp, given, polish_evaluations=p.job.polish_evaluations, say=say)
     best = preds[0]
     path = p.image_tables[spp]
     write_table(path, Table(best.table.grid, best.table.pdfs, [

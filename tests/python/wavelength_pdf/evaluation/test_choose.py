@@ -13,6 +13,7 @@ from wavelength_pdf.table import read_table
 
 BOX = REPO / "scenes" / "cornell-box" / "scene.pbrt"  # one tri-band fluorescent lamp
 TWO = REPO / "scenes" / "cornell-box-two-lamps" / "scene.pbrt"
+EVALUATIONS = 40  # each polish's budget in the tests that polish
 
 
 @pytest.fixture(scope="module")
@@ -99,7 +100,8 @@ def test_the_polish_is_never_predicted_worse_than_the_table_it_started_from(box_
     (design §4.6): each polish is predicted no worse than its start, since the ``pixels``
     objective is the prediction itself, and the ranking still runs best first. Below 64 spp
     each start is also polished at 64 spp and then at 16: predicted at 16 spp no worse than
-    the 64-spp polish it started from."""
+    the 64-spp polish it started from. (Short polishes, ``polish_evaluations``, for the
+    suite's time: the property holds for any budget.)"""
     _, work = box_predictions
     from wavelength_pdf import predict as P
     from wavelength_pdf.evaluation import transfer
@@ -107,7 +109,7 @@ def test_the_polish_is_never_predicted_worse_than_the_table_it_started_from(box_
     spectrum = transfer.one_kind(BOX)
     spd = choose.simple_tables(spectrum)["spd"]
     preds = choose.predict_tables(BOX, {"copy-of-spd": spd}, 16, work, resolution=0.08, pbrt=pbrt,
-                                  transfer_spp=128, polish=True)
+                                  transfer_spp=128, polish=True, polish_evaluations=EVALUATIONS)
     by = {p.name: p for p in preds}
     via = [f"polished {s} via {choose.CONTINUATION_SPP} spp" for s in ("spd", "copy-of-spd")]
     assert set(by) == {*stratified.METHODS, "copy-of-spd", "polished spd", "polished copy-of-spd", *via}
@@ -115,7 +117,8 @@ def test_the_polish_is_never_predicted_worse_than_the_table_it_started_from(box_
     for start in ("spd", "copy-of-spd"):
         assert by[f"polished {start}"].wavelength <= by[start].wavelength * (1 + 1e-9)
     tr = transfer.of_file(BOX, work, 0.08, pbrt, 128)
-    first = choose.polished_tables(spectrum, tr, choose.CONTINUATION_SPP, {"spd": spd})["polished spd"]
+    first = choose.polished_tables(spectrum, tr, choose.CONTINUATION_SPP, {"spd": spd},
+                                   max_evaluations=EVALUATIONS)["polished spd"]
     basis = P.hat_basis(tr.centres, transfer.LO, transfer.HI)
     assert by[via[0]].wavelength <= choose.wavelength_error(first, spectrum, basis, tr, 16) * (1 + 1e-9)
     for name in ("polished spd", "polished copy-of-spd", *via):  # four densities on the start's grid
@@ -132,7 +135,7 @@ def test_the_spread_is_measured_at_the_scenes_own_size(tmp_path, pbrt, capsys):
     scene.write_text(text.replace("[ 400 0.0  450 1.0", "[ 380 0.3  450 1.0").replace("700 0.0 ]", "780 0.2 ]"))
     work, out = tmp_path / "work", tmp_path / "best.csv"
     assert main(["choose", str(scene), "--spp", "4", "--transfer-spp", "16", "--spread", "--polish",
-                 "--workdir", str(work), "--pbrt", str(pbrt), "--quiet", "-o", str(out)]) == 0
+                 "--polish-evaluations", str(EVALUATIONS), "--workdir", str(work), "--pbrt", str(pbrt), "--quiet", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "polished spd" in text and out.is_file()
     copy = (work / "scene.pbrt").read_text()
@@ -143,9 +146,18 @@ def test_the_spread_is_measured_at_the_scenes_own_size(tmp_path, pbrt, capsys):
 @pytest.mark.parametrize("args, message", [
     ([str(BOX), "--spread", "--resolution-scale", "0.5"], "film size"),
     ([str(BOX), "--polish", "--pixel-sampler", "independent"], "low-discrepancy"),
+    ([str(BOX), "--polish-evaluations", "10"], "give --polish too"),
 ])
 def test_the_polish_and_the_spread_refuse_what_they_do_not_model(args, message, tmp_path, capsys):
     work = tmp_path / "work"
     assert main(["choose", *args, "--workdir", str(work)]) == 2
     assert message in capsys.readouterr().err
     assert not work.exists()
+
+
+def test_the_polish_budgets_default_is_the_solvers():
+    """``--help`` names the polish's default budget without importing the solvers; it is theirs."""
+    from wavelength_pdf.cli import choose as cli_choose
+    from wavelength_pdf.solvers import REFINE_EVALUATIONS
+
+    assert cli_choose.REFINE_EVALUATIONS == REFINE_EVALUATIONS

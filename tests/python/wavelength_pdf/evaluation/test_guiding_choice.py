@@ -262,7 +262,10 @@ def test_bad_inputs_are_refused_before_any_render(setup, tmp_path, capsys):
     assert main(["choose-guiding", str(scene), str(spectra), "--polish", "--pixel-sampler", "independent",
                  "-o", str(tmp_path / "o7")]) == 2
     assert "low-discrepancy" in capsys.readouterr().err
-    assert not work.exists() and not (tmp_path / "o6").exists() and not (tmp_path / "o7").exists()
+    assert main(["choose-guiding", str(scene), str(spectra), str(folders["xyz"]), "--polish-evaluations", "10",
+                 "-o", str(tmp_path / "o8")]) == 2
+    assert "give --polish too" in capsys.readouterr().err
+    assert not work.exists() and not any((tmp_path / o).exists() for o in ("o6", "o7", "o8"))
 
 
 def test_the_polish_adds_tables_no_worse_than_their_starts(setup, pbrt, tmp_path):
