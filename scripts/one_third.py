@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -145,17 +147,27 @@ def main(argv: list[str] | None = None) -> int:
     command = "scripts/one_third.py " + " ".join(argv if argv is not None else sys.argv[1:])
     args.outdir.mkdir(parents=True, exist_ok=True)
     paths = [args.outdir / "one-third.csv", args.outdir / "one-third.md"]
-    with open(paths[0], "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    paths[1].write_text(markdown(rows, command) + "\n")
-    if args.docs is not None:
-        args.docs.mkdir(parents=True, exist_ok=True)
-        for path in paths:
-            (args.docs / path.name).write_text(path.read_text())
+    table = io.StringIO(newline="")
+    w = csv.DictWriter(table, fieldnames=list(rows[0]), lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    texts = [table.getvalue(), markdown(rows, command) + "\n"]
+    folders = [args.outdir] + ([args.docs] if args.docs is not None else [])
+    for folder in folders:
+        folder.mkdir(parents=True, exist_ok=True)
+        for path, text in zip(paths, texts):
+            _write_whole(folder / path.name, text)
     print(markdown(rows, command))
     return 0
+
+
+def _write_whole(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file beside it, so that an interrupted
+    run leaves the earlier file or the new one, never part of one."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    with open(tmp, "w", newline="", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
 
 
 if __name__ == "__main__":
