@@ -174,19 +174,21 @@ def test_each_table_gets_its_least_prediction(setup):
 
 
 def test_the_margin_decides_between_emission_and_the_best_candidate(setup, pbrt, tmp_path):
-    """No margin: each table's least prediction; a margin near 1: every table keeps its emission
-    table, and the folder holds choice.csv alone. The predictions do not depend on the margin."""
+    """The default margin (0.1): each table's least prediction where it is below 0.9 times the
+    emission table's, else the emission table; a margin near 1: every table keeps its emission
+    table, and the folder holds choice.csv alone. The predictions do not depend on the margin.
+    (The setup's choice stands for the default margin: one more prediction, for the suite's time.)"""
     scene, spectra, folders, _, choices, tmp = setup
-    for margin in (0.0, 0.999):
-        out = tmp_path / f"margin-{margin}"
-        again = G.choose_guiding_tables(scene, spectra, folders, 16, out, tmp / "work", margin=margin,
-                                        resolution=0.5, pbrt=pbrt, transfer_spp=128)
-        assert [c.predicted for c in again] == [c.predicted for c in choices]
-        for c in again:
-            least = min(c.predicted, key=lambda n: (c.predicted[n], n != G.EMISSION))
-            assert c.chosen == (least if margin == 0 else G.EMISSION)
-        if margin:
-            assert [p.name for p in out.iterdir()] == [G.CHOICE]
+    assert len({c.chosen for c in choices}) > 1  # both sides of the rule occur
+    for c in choices:
+        least = min(c.predicted, key=lambda n: (c.predicted[n], n != G.EMISSION))
+        assert c.chosen == (least if c.predicted[least] < 0.9 * c.predicted[G.EMISSION] else G.EMISSION)
+    out = tmp_path / "margin"
+    again = G.choose_guiding_tables(scene, spectra, folders, 16, out, tmp / "work", margin=0.999,
+                                    resolution=0.5, pbrt=pbrt, transfer_spp=128)
+    assert [c.predicted for c in again] == [c.predicted for c in choices]
+    assert all(c.chosen == G.EMISSION for c in again)
+    assert [p.name for p in out.iterdir()] == [G.CHOICE]
     with pytest.raises(ValueError, match="margin"):
         G.choose_guiding_tables(scene, spectra, folders, 16, tmp_path / "m", tmp / "work", margin=1.0)
 
