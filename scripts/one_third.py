@@ -145,7 +145,6 @@ def main(argv: list[str] | None = None) -> int:
             rows += verdicts(p, pair_measures(p))
             bar.update(1)
     command = "scripts/one_third.py " + " ".join(argv if argv is not None else sys.argv[1:])
-    args.outdir.mkdir(parents=True, exist_ok=True)
     paths = [args.outdir / "one-third.csv", args.outdir / "one-third.md"]
     table = io.StringIO(newline="")
     w = csv.DictWriter(table, fieldnames=list(rows[0]), lineterminator="\n")
