@@ -37,6 +37,7 @@ import numpy as np
 from wavelength_pdf import progress
 from wavelength_pdf.evaluation.benchmark import grid as G
 from wavelength_pdf.evaluation.benchmark import measures, run
+from wavelength_pdf.evaluation.render import temporary
 from wavelength_pdf.exr import read_rgb
 
 #: The rows a share is measured for: the image's table (the rule's subject) and J's.
@@ -145,28 +146,21 @@ def main(argv: list[str] | None = None) -> int:
             rows += verdicts(p, pair_measures(p))
             bar.update(1)
     command = "scripts/one_third.py " + " ".join(argv if argv is not None else sys.argv[1:])
-    paths = [args.outdir / "one-third.csv", args.outdir / "one-third.md"]
     table = io.StringIO(newline="")
     w = csv.DictWriter(table, fieldnames=list(rows[0]), lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
-    texts = [table.getvalue(), markdown(rows, command) + "\n"]
-    folders = [args.outdir] + ([args.docs] if args.docs is not None else [])
-    for folder in folders:
+    page = markdown(rows, command)
+    texts = {"one-third.csv": table.getvalue(), "one-third.md": page + "\n"}
+    for folder in [args.outdir] + ([args.docs] if args.docs is not None else []):
         folder.mkdir(parents=True, exist_ok=True)
-        for path, text in zip(paths, texts):
-            _write_whole(folder / path.name, text)
-    print(markdown(rows, command))
+        for name, text in texts.items():
+            # Through a temporary file beside it: an interrupted run leaves the earlier file.
+            tmp = temporary(folder / name)
+            tmp.write_text(text, encoding="utf-8")
+            os.replace(tmp, folder / name)
+    print(page)
     return 0
-
-
-def _write_whole(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file beside it, so that an interrupted
-    run leaves the earlier file or the new one, never part of one."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "w", newline="", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
 
 
 if __name__ == "__main__":
