@@ -199,13 +199,13 @@ def for_image(spectrum, tr: transfer.Transfer, spp: int, tables: Mapping[str, ob
 
         starts = {"spd": cands["spd"] if "spd" in cands else simple_tables(spectrum)["spd"],
                   **{n: t for n, t in cands.items() if n not in METHODS}}
-        budget = {"say": say, "max_evaluations": polish_evaluations}
-        cands.update(polished_tables(spectrum, tr, spp, starts, **budget))
+        polish_options = {"say": say, "max_evaluations": polish_evaluations}
+        cands.update(polished_tables(spectrum, tr, spp, starts, **polish_options))
         if spp < CONTINUATION_SPP:
-            first = polished_tables(spectrum, tr, CONTINUATION_SPP, starts, **budget)
+            first = polished_tables(spectrum, tr, CONTINUATION_SPP, starts, **polish_options)
             cands.update(polished_tables(spectrum, tr, spp, {
                 f"{name.removeprefix(POLISHED + ' ')} via {CONTINUATION_SPP} spp": t for name, t in first.items()},
-                **budget))
+                **polish_options))
     if not cands:
         raise ValueError("no table to predict: give tables or keep the simple samplers")
     return rank(spectrum, tr, cands, spp, pixel_sampler, say)
