@@ -88,10 +88,17 @@ class Transfer:
 
 #: The renders that measure each pixel's spread (:func:`spread`) cut each side of a pixel into
 #: this many sub-pixels, at SPREAD_SPP samples each (one path per sub-pixel, so that their
-#: product is each path's own: as many paths per pixel as the incoherence renders, with as many
-#: wavelengths per path).
+#: product is each path's own: as many paths per pixel as the incoherence renders).
 SPREAD_FACTOR = 8
 SPREAD_SPP = 1
+#: Wavelengths per path of the spread's renders (``--wavelength-repeats``, each 4 wavelengths,
+#: shifted by k/K): each path's spectrum over the 20 buckets is one factor of the spread's
+#: products, and its wavelength noise, though it cancels in expectation, makes a pixel's spread
+#: indefinite. On the benchmark's ColorChecker (32 x 24, 8 x 8 sub-pixels) the median share of
+#: a pixel's absolute eigenvalue mass that is negative: 0.32 at 8 repeats (0.31 with four seeds
+#: averaged at 8, the same cost as 32), 0.052 at 32, 0.014 at 64, 0.001 at 256 (docs/benchmark.md,
+#: "A spread without negative variance"). Each render costs about K / 8 times that at 8.
+SPREAD_REPEATS = 64
 #: A pixel's filter footprint is cut into 2^i x 2^j cells of equal filter weight, i, j up to
 #: this, and the spread between them measured apart (:func:`net_cells`, :func:`cell_spread_of`):
 #: ``pbrt --wavelength-net`` draws u together with the film position, so a cell's samples have
@@ -273,18 +280,21 @@ def cell_spread_of(a: np.ndarray, b: np.ndarray, shares_y: np.ndarray, shares_x:
     return (prod - rho * spread) / np.maximum(1.0 - rho, 1e-12)
 
 
-def _spread_renders(source, folder, size, pbrt, nthreads, factor, spp):
-    """The two renders of :func:`spread` (H, W, B) and the pixel filter's shares along y and x."""
+def _spread_renders(source, folder, size, pbrt, nthreads, factor, spp, repeats=SPREAD_REPEATS, seed=1):
+    """The two renders of :func:`spread` (H, W, B) and the pixel filter's shares along y and x
+    (named by their repeats and seed, so that a folder's renders at others are not taken)."""
     w, h = size
     copy = copy_scene(source, folder, (w * factor, h * factor))
     kind, rx, ry, sigma = pixel_filter(copy)
-    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=1, repeats=INCOHERENCE_REPEATS,
-                                 wavelength_seed=ws, name=f"spread-wavelengths{ws}.exr"))[1] for ws in (1, 2))
+    a, b = (read_spectral(render(copy, pbrt, spp, nthreads, seed=seed, repeats=repeats, wavelength_seed=ws,
+                                 name=f"spread-wavelengths{ws}-repeats{repeats}-seed{seed}.exr"))[1]
+            for ws in (1, 2))
     return a, b, filter_shares(h, factor, kind, ry, sigma), filter_shares(w, factor, kind, rx, sigma)
 
 
 def spread(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: Path | None = None,
-           nthreads: int | None = None, factor: int = SPREAD_FACTOR, spp: int = SPREAD_SPP) -> np.ndarray:
+           nthreads: int | None = None, factor: int = SPREAD_FACTOR, spp: int = SPREAD_SPP,
+           repeats: int = SPREAD_REPEATS, seed: int = 1) -> np.ndarray:
     """(h, w, B, B): the spread of every pixel of ``source`` rendered at ``size`` (w, h)
     under the flat lamp (:func:`spread_of`), in bucket units, from two renders of a copy at
     ``factor`` times the resolution (``folder``; kept while the scene and the renderer are
@@ -296,16 +306,33 @@ def spread(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: 
     red wall and the next off a green one. The part D of each sample's estimate is not
     stratified by the pixel's u, and adds sum_bc S_bc Cov_u(C_b, C_c) / N, S the spread
     (:func:`wavelength_pdf.predict.pixel_de2`). With ``spp`` 1 each sub-pixel is one path and
-    S is the paths' own covariance; with more, that of their means in a sub-pixel."""
-    return spread_of(*_spread_renders(source, folder, size, pbrt, nthreads, factor, spp))
+    S is the paths' own covariance; with more, that of their means in a sub-pixel. ``repeats``
+    wavelengths per path (:data:`SPREAD_REPEATS`) set how much of S's noise is each path's
+    wavelength noise; ``seed`` (``--seed``) draws other paths."""
+    return spread_of(*_spread_renders(source, folder, size, pbrt, nthreads, factor, spp, repeats, seed))
+
+
+def negative_share(spread: np.ndarray, pooled: bool = False) -> np.ndarray | float:
+    """(...,): each pixel's share of its spread's absolute eigenvalue mass that is negative (0
+    for a covariance; what noise adds, :data:`SPREAD_REPEATS`), nan where the spread is 0; with
+    ``pooled``, the pixels' negative mass over their absolute mass, summed over all of them (the
+    share of the noise where the spread is large, as a prediction summed over pixels weighs it)."""
+    ev = np.linalg.eigvalsh(spread)
+    negative, mass = np.clip(-ev, 0, None).sum(axis=-1), np.abs(ev).sum(axis=-1)
+    if pooled:
+        total = float(mass.sum())
+        return float(negative.sum()) / total if total > 0 else float("nan")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(mass > 0, negative / mass, np.nan)
 
 
 def spread_with_cells(source: str | Path, folder: str | Path, size: tuple[int, int], pbrt: Path | None = None,
-                      nthreads: int | None = None, cells: Sequence[tuple[int, int]] = net_cells()):
+                      nthreads: int | None = None, cells: Sequence[tuple[int, int]] = net_cells(),
+                      repeats: int = SPREAD_REPEATS):
     """:func:`spread` and, from the same renders, for each (i, j) of ``cells``
     ((i, j), (h, w, B, B)), the part of it that lies between the pixel's 2^i x 2^j cells
     (:func:`cell_spread_of`)."""
-    a, b, sy, sx = _spread_renders(source, folder, size, pbrt, nthreads, SPREAD_FACTOR, SPREAD_SPP)
+    a, b, sy, sx = _spread_renders(source, folder, size, pbrt, nthreads, SPREAD_FACTOR, SPREAD_SPP, repeats)
     S = spread_of(a, b, sy, sx)
     return S, tuple(((i, j), cell_spread_of(a, b, sy, sx, (2 ** i, 2 ** j), S)) for i, j in cells)
 

@@ -167,6 +167,36 @@ def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
     assert edge.mean() > 10 * abs(inside.mean())
 
 
+def test_negative_share_of_analytic_spreads():
+    """A covariance has none; -S all of it; diag(1, -1) half; a zero spread none to speak of (nan)."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(5, 4, 6))
+    S = X @ np.swapaxes(X, -1, -2)  # (5, 4, 4), positive semidefinite
+    np.testing.assert_allclose(transfer.negative_share(S), 0.0, atol=1e-12)
+    np.testing.assert_allclose(transfer.negative_share(-S), 1.0)
+    assert transfer.negative_share(np.diag([2.0, -2.0, 0.0])) == pytest.approx(0.5)
+    assert np.isnan(transfer.negative_share(np.zeros((3, 3))))
+    # Pooled: the sum over pixels, so a large pixel outweighs a small one.
+    mixed = np.stack([np.diag([3.0, 1.0]), np.diag([1.0, -1.0])])  # masses 4 and 2, negative 0 and 1
+    assert transfer.negative_share(mixed, pooled=True) == pytest.approx(1 / 6)
+    assert np.isnan(transfer.negative_share(np.zeros((2, 3, 3)), pooled=True))
+
+
+def test_the_spread_has_almost_no_negative_variance(tmp_path, pbrt):
+    """A pixel's spread is a covariance, positive semidefinite but for noise. Rendered at the
+    module's wavelengths per path (``SPREAD_REPEATS``) on the benchmark's ColorChecker
+    (32 x 24), the median pixel's negative eigenvalues are a few per cent of its absolute
+    eigenvalue mass; at 8 wavelength repeats, each path's spectrum over the buckets so sparse
+    that its noise dominates, they are a fifth or more: the indefinite directions a polish
+    can lean on."""
+    from repo_paths import REPO
+
+    scene = REPO / "scenes" / "benchmark" / "colorchecker" / "scene.pbrt"
+    few, enough = (np.nanmedian(transfer.negative_share(transfer.spread(scene, tmp_path, (32, 24), pbrt, repeats=k)))
+                   for k in (8, transfer.SPREAD_REPEATS))
+    assert enough < 0.03 and few > 0.2, (enough, few)
+
+
 def test_a_noisy_spread_is_measured_linearly(fl2_basis):
     """A measured spread is noisy and can be indefinite: the prediction is linear in it, so
     noise of mean 0 leaves the mean prediction unbiased (clipping negative variances would not)."""
