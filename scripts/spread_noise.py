@@ -7,7 +7,7 @@ spread without negative variance").
 
     .venv/bin/python scripts/spread_noise.py --repeats 8 32 64 256 --seeds 1 4
 
-prints a line per (repeats, seeds): the share and the renders' wall time. The default scene is
+prints a line per (repeats, seeds): the two shares and the wall time (renders and sums). The default scene is
 the benchmark's ColorChecker at the lamp sweep's 32 x 24; the renders are kept in ``--workdir``.
 """
 from __future__ import annotations

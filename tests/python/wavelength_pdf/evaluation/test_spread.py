@@ -168,7 +168,7 @@ def test_a_rendered_colorchecker_spreads_at_its_patches_edges(tmp_path, pbrt):
 
 
 def test_negative_share_of_analytic_spreads():
-    """A covariance has none; -S all of it; diag(1, -1) half; a zero spread none to speak of (nan)."""
+    """A covariance has none; -S all of it; diag(2, -2, 0) half; a zero spread none to speak of (nan)."""
     rng = np.random.default_rng(3)
     X = rng.normal(size=(5, 4, 6))
     S = X @ np.swapaxes(X, -1, -2)  # (5, 4, 4), positive semidefinite
