@@ -30,10 +30,7 @@ def cmd_choose(args: argparse.Namespace) -> int:
     if args.spread and args.resolution_scale != 1:
         raise BadInput("--spread measures the pixels you render: it needs the scene's own film size "
                        f"(--resolution-scale 1), not {args.resolution_scale:g} of it")
-    if args.polish and args.pixel_sampler != "sobol":
-        raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
-    if args.polish_evaluations is not None and not args.polish:
-        raise BadInput("--polish-evaluations is the polish's budget: give --polish too")
+    _check_polish(args)
     tables = {}
     for path in args.tables:
         tables[str(path)] = read_table(path)  # every table read (and refused) before any render
@@ -70,10 +67,7 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
         raise BadInput(f"--resolution-scale must lie in (0, 1], not {args.resolution_scale:g}")
     if not 0 <= args.margin < 1:
         raise BadInput(f"--margin must lie in [0, 1), not {args.margin:g}")
-    if args.polish and args.pixel_sampler != "sobol":
-        raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
-    if args.polish_evaluations is not None and not args.polish:
-        raise BadInput("--polish-evaluations is the polish's budget: give --polish too")
+    _check_polish(args)
     if not args.candidates and not args.polish:
         raise BadInput("nothing to choose from: give folders of optimized tables (TABLES) or --polish")
     candidates = {}
@@ -106,6 +100,14 @@ def cmd_choose_guiding(args: argparse.Namespace) -> int:
     if not kept:
         print("every table keeps its emission table: render without --wavelength-guiding-tables")
     return 0
+
+
+def _check_polish(args: argparse.Namespace) -> None:
+    """``--polish`` and its budget, as both commands take them (before any render)."""
+    if args.polish and args.pixel_sampler != "sobol":
+        raise BadInput("--polish models the low-discrepancy pixel sampler (--pixel-sampler sobol)")
+    if args.polish_evaluations is not None and not args.polish:
+        raise BadInput("--polish-evaluations is the polish's budget: give --polish too")
 
 
 def _prediction_options(c, resolution: float) -> None:
